@@ -1,0 +1,66 @@
+"""A whole fog's transmittance along rays, composed as the shader composes it.
+
+T = (exp(-sum tau_i) * T_particles * T_noise_surface * T_distance) ^ density, with the
+global effects applied as in shaders/fog/transmittance.glsl: the segment starts at
+`start_distance`, points beyond `cutoff_distance` get no fog, and T never drops below
+1 - `max_opacity`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .. import noise as noise_bake
+from ..params import FogParams, Noise, Particles, Distance
+from . import cosine, distance, height, homogeneous, noise, particles, polynomial, potential, sphere
+from ._ray import as_rays
+
+EXPONENTIAL = {
+    "homogeneous": homogeneous,
+    "height": height,
+    "cosine": cosine,
+    "polynomial": polynomial,
+    "potential": potential,
+    "sphere": sphere,
+}
+
+
+def layer_transmittance(layer, fog: FogParams, O, omega, d, t, *, tex=None, state=None):
+    """One layer's T along the rays (no global effects)."""
+    wind = fog.wind.vector()
+    if layer.kind in EXPONENTIAL:
+        return np.exp(-EXPONENTIAL[layer.kind].optical_depth(layer, O, omega, d, t, wind))
+    if isinstance(layer, Noise):
+        return np.exp(-noise.optical_depth(layer, tex, O, omega, d, t, wind))
+    if isinstance(layer, Distance):
+        return distance.transmittance(layer, tex, O, omega, d, t, wind)
+    if isinstance(layer, Particles):
+        return particles.transmittance(layer, state, O, omega, d)
+    raise ValueError(f"unknown layer kind {layer.kind!r}")
+
+
+def transmittance(fog: FogParams, O, omega, d, t, *, states=None):
+    """T along each ray. `states[i]` is the particle state of layer i for particle layers
+    (all rays share one time then); by default it is simulated at t[0]."""
+    from ..particles import simulate
+    from ..terrain import flat, height as ground_height
+
+    O, omega, d, t = as_rays(O, omega, d, t)
+    eff = fog.effects
+    start = eff.start_distance
+    O = O + omega * min(start, 1e300)  # the segment begins at the start distance
+    dd = np.maximum(d - start, 0.0)
+    tex = noise_bake.bake(fog.noise.size, fog.noise.octaves, fog.noise.blur, fog.noise.seed)
+    ground = flat if fog.scene == "calibration" else ground_height
+    T = np.ones(len(d))
+    for i, layer in enumerate(fog.layers):
+        if not layer.enabled:
+            continue
+        state = None
+        if isinstance(layer, Particles):
+            state = (states or {}).get(i) or simulate(layer, float(t[0]), fog.wind.vector(), ground)
+        T = T * layer_transmittance(layer, fog, O, omega, dd, t, tex=tex, state=state)
+    T = T ** fog.density
+    if eff.cutoff_distance > 0:
+        T = np.where(d > eff.cutoff_distance, 1.0, T)
+    return np.maximum(T, 1.0 - eff.max_opacity)

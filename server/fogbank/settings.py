@@ -1,0 +1,40 @@
+"""Every setting of the service, in one place (environment variables FOGBANK_*)."""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from typing import Literal
+
+from pydantic import Field, ValidationError
+from pydantic_settings import BaseSettings, SettingsConfigDict
+
+
+class Settings(BaseSettings):
+    model_config = SettingsConfigDict(env_prefix="FOGBANK_", extra="ignore")
+
+    host: str = Field("127.0.0.1", description="address the server binds")
+    port: int = Field(8000, ge=1, le=65535, description="TCP port")
+    gl_backend: Literal["auto", "egl", "default"] = Field(
+        "auto", description="'auto' and 'egl' use EGL (the GPU where there is one, else llvmpipe); "
+        "'default' lets glcontext pick (GLX/WGL/CGL)")
+    gl_device: int | None = Field(None, ge=0, description="EGL device index; unset picks the first")
+    max_still_pixels: int = Field(16 * 1024 * 1024, ge=1, description="largest still, in pixels")
+    max_still_side: int = Field(4096, ge=1, description="largest still side, in pixels")
+    render_timeout_s: float = Field(60.0, gt=0, description="how long a request waits for the renderer")
+    encode_threads: int = Field(2, ge=1, le=32, description="threads that encode images")
+
+
+class SettingsError(ValueError):
+    """A setting's value is not allowed; the message names the key and the value."""
+
+
+@lru_cache(maxsize=1)
+def get_settings() -> Settings:
+    try:
+        return Settings()
+    except ValidationError as exc:
+        lines = []
+        for err in exc.errors():
+            key = "FOGBANK_" + "_".join(str(p) for p in err["loc"]).upper()
+            lines.append(f"{key}={err.get('input')!r}: {err['msg']}")
+        raise SettingsError("bad setting: " + "; ".join(lines)) from None
