@@ -1,0 +1,194 @@
+"""REST routes: stills, transmittance, schema, presets, health; the static page."""
+
+from __future__ import annotations
+
+import asyncio
+import hashlib
+import logging
+from collections import OrderedDict
+from concurrent.futures import ThreadPoolExecutor
+from contextlib import asynccontextmanager
+from typing import Any, Literal
+
+import numpy as np
+from fastapi import Body, FastAPI, Request
+from fastapi.encoders import jsonable_encoder
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import FileResponse, JSONResponse, Response
+from fastapi.staticfiles import StaticFiles
+from pydantic import BaseModel, Field, ValidationError
+
+from . import STATIC_DIR, __version__
+from . import presets as P
+from .encode import MEDIA_TYPES, encode
+from .params import FogParams, StillParams, Strict, Vec3
+from .render_thread import RenderThread
+from .settings import Settings, get_settings
+from .urlstate import URLError, decode
+from .urlstate import encode as encode_url
+
+log = logging.getLogger("fogbank.api")
+MAX_RAYS = 65536
+
+
+class Ray(Strict):
+    origin: Vec3 = Field(description="m")
+    direction: Vec3 = Field(description="normalised by the server; must not be zero")
+    length: float = Field(ge=0, le=1e6, description="m")
+    time: float = Field(0.0, ge=0, le=1e6, description="s")
+
+
+class TransmittanceRequest(Strict):
+    params: dict[str, Any] = Field(default_factory=dict,
+                                   description="a patch over the default preset (FogParams fields)")
+    rays: list[Ray] = Field(min_length=1, max_length=MAX_RAYS)
+
+
+class TransmittanceResponse(BaseModel):
+    transmittance: list[float]
+    renderer: str
+
+
+def _validation_error(exc: ValidationError, prefix: tuple) -> RequestValidationError:
+    errors = []
+    for e in exc.errors(include_url=False):
+        e = dict(e)
+        e["loc"] = (*prefix, *e["loc"])
+        e.pop("ctx", None) if not isinstance(e.get("ctx"), dict) else None
+        errors.append(e)
+    return RequestValidationError(jsonable_encoder(errors, custom_encoder={ValueError: str}))
+
+
+def resolve(patch: dict, cls=StillParams, prefix: tuple = ("body",)):
+    """A request's params: `patch` merged over the default preset, validated."""
+    if not isinstance(patch, dict):
+        raise RequestValidationError([{"loc": list(prefix), "msg": "expected a JSON object",
+                                       "type": "dict_type"}])
+    base = P.preset_dict("default")
+    if cls is StillParams:
+        base.update(width=StillParams.model_fields["width"].default,
+                    height=StillParams.model_fields["height"].default)
+    try:
+        return cls.model_validate(P.merge(base, patch))
+    except ValidationError as exc:
+        raise _validation_error(exc, prefix) from None
+
+
+def create_app(settings: Settings | None = None) -> FastAPI:
+    settings = settings or get_settings()
+    state: dict[str, Any] = {}
+
+    @asynccontextmanager
+    async def lifespan(app: FastAPI):
+        rt = RenderThread(settings.gl_backend, settings.gl_device)
+        await asyncio.get_running_loop().run_in_executor(None, rt.wait_ready)
+        log.info("renderer: %s", rt.info)
+        state["render"] = rt
+        state["pool"] = ThreadPoolExecutor(settings.encode_threads, thread_name_prefix="encode")
+        state["cache"] = OrderedDict()
+        yield
+        rt.stop()
+        state["pool"].shutdown(wait=False)
+
+    app = FastAPI(title="fogbank", version=__version__, lifespan=lifespan,
+                  description="Analytic fog over a 3D scene, rendered on the server. "
+                              "Every look is a URL: the same query works on the page and on "
+                              "/api/still.png.")
+
+    @app.exception_handler(RequestValidationError)
+    async def _422(request: Request, exc: RequestValidationError):
+        return JSONResponse({"detail": jsonable_encoder(exc.errors())}, status_code=422)
+
+    async def _run(fn):
+        fut = state["render"].submit(fn)
+        return await asyncio.wait_for(asyncio.wrap_future(fut), settings.render_timeout_s)
+
+    async def _still(still: StillParams, fmt: str, request: Request) -> Response:
+        info = state["render"].info
+        key = f"{__version__}|{info.get('renderer')}|{fmt}|{encode_url(still)}"
+        etag = '"' + hashlib.sha256(key.encode()).hexdigest()[:32] + '"'
+        headers = {"ETag": etag, "Cache-Control": "public, max-age=3600",
+                   "X-Fogbank-Query": encode_url(still)}
+        if request.headers.get("if-none-match") == etag:
+            return Response(status_code=304, headers=headers)
+        cache: OrderedDict = state["cache"]
+        if etag in cache:
+            cache.move_to_end(etag)
+            return Response(cache[etag], media_type=MEDIA_TYPES[fmt], headers=headers)
+        img = await _run(lambda r: r.render(still))
+        loop = asyncio.get_running_loop()
+        data = await loop.run_in_executor(state["pool"], encode, img, fmt)
+        cache[etag] = data
+        while len(cache) > 32:
+            cache.popitem(last=False)
+        return Response(data, media_type=MEDIA_TYPES[fmt], headers=headers)
+
+    @app.get("/api/still.{fmt}", summary="Render a still from URL params",
+             responses={200: {"content": {m: {} for m in MEDIA_TYPES.values()}},
+                        422: {"description": "a param is invalid; the body names it"}})
+    async def still_get(fmt: Literal["png", "jpg", "webp"], request: Request):
+        """Every param of the page URL (see /api/schema), plus `width` and `height`;
+        anything left out comes from the default preset (or `preset=NAME`)."""
+        try:
+            value, _ = decode(request.url.query, StillParams)
+        except URLError as exc:
+            raise RequestValidationError(exc.errors) from None
+        try:
+            still = StillParams.model_validate(value)
+        except ValidationError as exc:
+            raise _validation_error(exc, ("query",)) from None
+        return await _still(still, fmt, request)
+
+    @app.post("/api/still", summary="Render a still from JSON params",
+              responses={200: {"content": {m: {} for m in MEDIA_TYPES.values()}}})
+    async def still_post(request: Request, format: Literal["png", "jpg", "webp"] = "png",
+                         body: dict[str, Any] = Body(default_factory=dict,
+                                                     description="StillParams fields, a patch "
+                                                                 "over the default preset")):
+        return await _still(resolve(body), format, request)
+
+    @app.post("/api/transmittance", response_model=TransmittanceResponse,
+              summary="Transmittance of rays through the fog, by the frame's own GLSL")
+    async def transmittance(req: TransmittanceRequest):
+        fog = resolve(req.params, FogParams, ("body", "params"))
+        O = np.array([r.origin for r in req.rays], dtype=np.float64)
+        W = np.array([r.direction for r in req.rays], dtype=np.float64)
+        norms = np.linalg.norm(W, axis=1)
+        bad = np.nonzero(~(norms > 1e-12))[0]
+        if len(bad):
+            raise RequestValidationError([{"loc": ["body", "rays", int(bad[0]), "direction"],
+                                           "msg": "direction must be a non-zero vector",
+                                           "type": "value_error"}])
+        W = W / norms[:, None]
+        D = np.array([r.length for r in req.rays])
+        Tm = np.array([r.time for r in req.rays])
+        T = await _run(lambda r: r.transmittance(fog, O, W, D, Tm))
+        return {"transmittance": [float(x) for x in T],
+                "renderer": state["render"].info.get("renderer", "")}
+
+    @app.get("/api/schema", summary="JSON Schema of the params (ranges, slider steps, units)")
+    async def schema():
+        return StillParams.model_json_schema()
+
+    @app.get("/api/presets", summary="The named looks")
+    async def presets_list():
+        out = []
+        for name, p in P.presets().items():
+            fog = FogParams.model_validate(P.preset_dict(name))
+            out.append({"name": name, "title": p["title"], "description": p["description"],
+                        "query": encode_url(fog), "params": P.preset_dict(name)})
+        return out
+
+    @app.get("/healthz", summary="Liveness and the renderer in use")
+    async def healthz():
+        rt = state.get("render")
+        info = rt.info if rt else {}
+        return {"status": "ok", "renderer": info.get("renderer"), "gl_version": info.get("version"),
+                "queue": rt.depth() if rt else 0}
+
+    @app.get("/", include_in_schema=False)
+    async def index():
+        return FileResponse(STATIC_DIR / "index.html")
+
+    app.mount("/static", StaticFiles(directory=STATIC_DIR), name="static")
+    return app

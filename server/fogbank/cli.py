@@ -1,0 +1,110 @@
+"""The `fogbank` command: serve, still, gallery."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+
+def _still_params(args):
+    from pydantic import ValidationError
+
+    from .params import StillParams
+    from .urlstate import URLError, decode
+    query = "&".join(args.params)
+    if args.preset:
+        query = f"preset={args.preset}" + (f"&{query}" if query else "")
+    try:
+        value, _ = decode(query, StillParams)
+        return StillParams.model_validate(value)
+    except URLError as exc:
+        sys.exit(f"fogbank still: {exc}")
+    except ValidationError as exc:
+        sys.exit("fogbank still: " + "; ".join(
+            f"{'.'.join(map(str, e['loc']))}: {e['msg']}" for e in exc.errors()))
+
+
+def cmd_serve(args) -> None:
+    import uvicorn
+
+    from .api import create_app
+    from .settings import get_settings
+    settings = get_settings().model_copy(update={"host": args.host, "port": args.port})
+    uvicorn.run(create_app(settings), host=args.host, port=args.port, log_level="info")
+
+
+def cmd_still(args) -> None:
+    from .encode import encode
+    from .renderer import Renderer, create_context
+    from .settings import get_settings
+    still = _still_params(args)
+    fmt = {"jpeg": "jpg"}.get(Path(args.out).suffix.lower().lstrip("."), Path(args.out).suffix.lower().lstrip("."))
+    if fmt not in ("png", "jpg", "webp"):
+        sys.exit(f"fogbank still: --out must end in .png, .jpg or .webp, not {args.out!r}")
+    s = get_settings()
+    r = Renderer(create_context(s.gl_backend, s.gl_device))
+    img = r.render(still)
+    Path(args.out).write_bytes(encode(img, fmt))
+    print(f"{args.out}: {still.width}x{still.height} on {r.info()['renderer']}")
+
+
+def cmd_gallery(args) -> None:
+    """Render every preset at --width x --height as JPEG, timing each (median of --repeat)."""
+    from .encode import encode
+    from .params import StillParams
+    from .presets import preset_dict, presets
+    from .renderer import Renderer, create_context
+    from .settings import get_settings
+    s = get_settings()
+    r = Renderer(create_context(s.gl_backend, s.gl_device))
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    rows = []
+    for name in presets():
+        still = StillParams.model_validate({**preset_dict(name), "width": args.width, "height": args.height})
+        r.render(still)  # warm: meshes, programs, targets
+        times = []
+        for i in range(args.repeat):
+            # a new time each run, so the scene pass is cached but the fog is recomputed
+            cold = still.model_copy(update={"camera": still.camera.model_copy(
+                update={"yaw": still.camera.yaw + 1e-3 * (i + 1)})})
+            t0 = time.perf_counter()
+            r.render(cold)
+            times.append(time.perf_counter() - t0)
+        img = r.render(still)
+        (out / f"{name}.jpg").write_bytes(encode(img, "jpg", quality=82))
+        med = sorted(times)[len(times) // 2]
+        rows.append({"preset": name, "ms": round(med * 1000, 1)})
+        print(f"{name:18s} {med * 1000:8.1f} ms  (median of {args.repeat}, {args.width}x{args.height}, "
+              f"full frame incl. scene pass and readback)")
+    print(json.dumps({"renderer": r.info()["renderer"], "results": rows}))
+
+
+def main(argv: list[str] | None = None) -> None:
+    ap = argparse.ArgumentParser(prog="fogbank", description="Analytic fog, rendered on the server.")
+    sub = ap.add_subparsers(dest="cmd", required=True)
+    p = sub.add_parser("serve", help="run the web service")
+    p.add_argument("--host", default="127.0.0.1")
+    p.add_argument("--port", type=int, default=8000)
+    p.set_defaults(fn=cmd_serve)
+    p = sub.add_parser("still", help="render one still to a file",
+                       description="params are URL fields: fogbank still --out a.png width=640 camera.yaw=20")
+    p.add_argument("--out", required=True, help="FILE.png, FILE.jpg or FILE.webp")
+    p.add_argument("--preset", help="start from this preset instead of the default")
+    p.add_argument("params", nargs="*", help="key=value fields, as in the page URL")
+    p.set_defaults(fn=cmd_still)
+    p = sub.add_parser("gallery", help="render and time every preset")
+    p.add_argument("--out", default="docs/gallery")
+    p.add_argument("--width", type=int, default=1280)
+    p.add_argument("--height", type=int, default=720)
+    p.add_argument("--repeat", type=int, default=5)
+    p.set_defaults(fn=cmd_gallery)
+    args = ap.parse_args(argv)
+    args.fn(args)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,334 @@
+"""The GL renderer: scene pass, fog pass, composite, blur, readback.
+
+Owned by one thread (render_thread.py): every method here makes GL calls and must run
+on the thread that created the context. Programs, meshes, the noise texture and the
+render targets are built once and reused; the scene pass (G-buffer) is cached while
+scene, camera, sun and size do not change.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import moderngl
+import numpy as np
+
+from . import camera as cam
+from . import scene as scenes
+from . import terrain
+from .layers import DEFINES, pack
+from .noise import bake
+from .params import MAX_PARTICLES, FogParams, Particles, StillParams, srgb_to_linear
+from .particles import simulate
+from .shaders import program
+
+MSAA_SAMPLES = 4
+SHADOW_SIZE = 2048
+RAYS_PER_ROW = 1024
+TEX = {"uColor": 0, "uInvDist": 1, "uFog": 2, "uParticles": 3, "uNoise": 4, "uShadow": 5,
+       "uRays": 6, "uImage": 0}
+
+
+def create_context(backend: str = "auto", device: int | None = None) -> moderngl.Context:
+    """A standalone context on EGL (GPU if the EGL device is one, else Mesa llvmpipe)."""
+    if backend == "default":
+        return moderngl.create_context(standalone=True, require=330)
+    kwargs = {"device_index": device} if device is not None else {}
+    return moderngl.create_context(standalone=True, backend="egl", require=330, **kwargs)
+
+
+def _set(prog, name: str, value) -> None:
+    """Set a uniform if the program uses it (unused uniforms are optimised away)."""
+    if name not in prog:
+        return
+    u = prog[name]
+    if isinstance(value, np.ndarray) and value.ndim == 2 and value.shape == (4, 4):
+        u.write(value.T.astype("f4").tobytes())  # GL matrices are column-major
+    elif isinstance(value, np.ndarray):
+        u.value = tuple(float(v) for v in value)
+    else:
+        u.value = value
+
+
+@dataclass
+class Targets:
+    """Render targets for one frame size."""
+    size: tuple[int, int]
+    msaa: moderngl.Framebuffer
+    gbuf: moderngl.Framebuffer
+    color: moderngl.Texture
+    invdist: moderngl.Texture
+    out: moderngl.Framebuffer
+    fog: dict[int, tuple[moderngl.Framebuffer, moderngl.Texture]] = field(default_factory=dict)
+    linear: list[tuple[moderngl.Framebuffer, moderngl.Texture]] = field(default_factory=list)
+    scene_key: object = None
+
+
+class Renderer:
+    def __init__(self, ctx: moderngl.Context):
+        self.ctx = ctx
+        p = lambda v, f, **d: program(ctx, v, f, {**DEFINES, **d})  # noqa: E731
+        self.sky_prog = p("passes/fullscreen.vert", "passes/sky.frag")
+        self.scene_prog = p("passes/scene.vert", "passes/scene.frag")
+        self.shadow_prog = p("passes/shadow.vert", "passes/shadow.frag")
+        self.fog_prog = p("passes/fullscreen.vert", "passes/fog.frag")
+        self.rays_prog = p("passes/fullscreen.vert", "passes/rays.frag", RAYS_PER_ROW=RAYS_PER_ROW)
+        self.composite_prog = p("passes/fullscreen.vert", "passes/composite.frag")
+        self.blur_prog = p("passes/fullscreen.vert", "passes/blur.frag")
+        self.empty_vao = {prog: ctx.vertex_array(prog, []) for prog in (
+            self.sky_prog, self.fog_prog, self.rays_prog, self.composite_prog, self.blur_prog)}
+        for prog in (self.scene_prog, self.fog_prog, self.rays_prog, self.composite_prog,
+                     self.blur_prog, self.sky_prog):
+            for name, unit in TEX.items():
+                _set(prog, name, unit)
+        self.particles = ctx.texture((MAX_PARTICLES, 1), 4, dtype="f4")
+        self.particles.filter = (moderngl.NEAREST, moderngl.NEAREST)
+        self.shadow_tex = ctx.depth_texture((SHADOW_SIZE, SHADOW_SIZE))
+        self.shadow_tex.compare_func = "<="
+        self.shadow_tex.repeat_x = self.shadow_tex.repeat_y = False
+        self.shadow_fbo = ctx.framebuffer(depth_attachment=self.shadow_tex)
+        self.shadow_key: object = None
+        self._meshes: dict[str, tuple] = {}
+        self._targets: dict[tuple[int, int], Targets] = {}
+        self._noise: dict[tuple, moderngl.Texture] = {}
+        self._rays_fbo: tuple | None = None
+
+    # ------------------------------------------------------------ info
+
+    def info(self) -> dict[str, str]:
+        i = self.ctx.info
+        return {"renderer": i["GL_RENDERER"], "version": i["GL_VERSION"], "vendor": i["GL_VENDOR"]}
+
+    # ------------------------------------------------------------ resources
+
+    def _mesh(self, name: str):
+        if name not in self._meshes:
+            m = scenes.build(name)
+            fmt = ("3f 3f 3f 1f", "aPos", "aNormal", "aColor", "aMaterial")
+            vaos = []
+            if len(m.terrain_indices):
+                vbo = self.ctx.buffer(m.terrain_vertices.tobytes())
+                ibo = self.ctx.buffer(m.terrain_indices.tobytes())
+                vaos.append((self.ctx.vertex_array(self.scene_prog, [(vbo, *fmt)], ibo, 4),
+                             self.ctx.vertex_array(self.shadow_prog, [(vbo, "3f 28x", "aPos")], ibo, 4)))
+            vbo = self.ctx.buffer(m.objects.tobytes())
+            vaos.append((self.ctx.vertex_array(self.scene_prog, [(vbo, *fmt)]),
+                         self.ctx.vertex_array(self.shadow_prog, [(vbo, "3f 28x", "aPos")])))
+            self._meshes[name] = (vaos, m.bounds)
+        return self._meshes[name]
+
+    def _noise_tex(self, fog: FogParams) -> moderngl.Texture:
+        key = (fog.noise.size, fog.noise.octaves, fog.noise.blur, fog.noise.seed)
+        if key not in self._noise:
+            data = bake(*key)
+            n = key[0]
+            # GL wants x fastest; the baked array is indexed [x, y, z]
+            tex = self.ctx.texture3d((n, n, n), 1, np.ascontiguousarray(data.transpose(2, 1, 0)).tobytes(),
+                                     dtype="f4")
+            tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+            if len(self._noise) >= 4:
+                self._noise.pop(next(iter(self._noise))).release()
+            self._noise[key] = tex
+        return self._noise[key]
+
+    def _targets_for(self, w: int, h: int) -> Targets:
+        if (w, h) not in self._targets:
+            ctx = self.ctx
+            if len(self._targets) >= 4:  # keep a few sizes; drop the oldest
+                old = self._targets.pop(next(iter(self._targets)))
+                for obj in (old.msaa, old.gbuf, old.out):
+                    obj.release()
+            msaa = ctx.framebuffer(
+                color_attachments=[ctx.renderbuffer((w, h), 4, samples=MSAA_SAMPLES, dtype="f2"),
+                                   ctx.renderbuffer((w, h), 1, samples=MSAA_SAMPLES, dtype="f4")],
+                depth_attachment=ctx.depth_renderbuffer((w, h), samples=MSAA_SAMPLES))
+            color = ctx.texture((w, h), 4, dtype="f2")
+            color.repeat_x = color.repeat_y = False
+            invdist = ctx.texture((w, h), 1, dtype="f4")
+            invdist.filter = (moderngl.NEAREST, moderngl.NEAREST)
+            gbuf = ctx.framebuffer(color_attachments=[color, invdist])
+            out = ctx.framebuffer(color_attachments=[ctx.renderbuffer((w, h), 4)])
+            self._targets[(w, h)] = Targets((w, h), msaa, gbuf, color, invdist, out)
+        return self._targets[(w, h)]
+
+    def _fog_target(self, t: Targets, scale: int):
+        if scale not in t.fog:
+            w, h = t.size
+            size = (-(-w // scale), -(-h // scale))
+            tex = self.ctx.texture(size, 2, dtype="f4")
+            tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+            t.fog[scale] = (self.ctx.framebuffer(color_attachments=[tex]), tex)
+        return t.fog[scale]
+
+    def _linear_targets(self, t: Targets):
+        while len(t.linear) < 2:
+            tex = self.ctx.texture(t.size, 4, dtype="f2")
+            tex.repeat_x = tex.repeat_y = False
+            t.linear.append((self.ctx.framebuffer(color_attachments=[tex]), tex))
+        return t.linear
+
+    # ------------------------------------------------------------ passes
+
+    def _shadow_pass(self, fog: FogParams, vaos, bounds) -> np.ndarray:
+        center, half = bounds
+        sun_vp = cam.ortho_sun(fog.sun.direction(), center, half)
+        key = (fog.scene, fog.sun.azimuth, fog.sun.elevation)
+        if key != self.shadow_key:
+            self.shadow_fbo.use()
+            self.shadow_fbo.clear(depth=1.0)
+            self.ctx.enable(moderngl.DEPTH_TEST)
+            self.ctx.disable(moderngl.CULL_FACE)
+            _set(self.shadow_prog, "uSunViewProj", sun_vp)
+            for _, shadow_vao in vaos:
+                shadow_vao.render(moderngl.TRIANGLES)
+            self.shadow_key = key
+        return sun_vp
+
+    def _scene_pass(self, fog: FogParams, t: Targets, view: cam.View) -> None:
+        key = (fog.scene, fog.camera, fog.sun)
+        if t.scene_key == key:
+            return
+        ctx = self.ctx
+        vaos, bounds = self._mesh(fog.scene)
+        sun_vp = self._shadow_pass(fog, vaos, bounds)
+        sun_dir = fog.sun.direction()
+        sun_col = np.array(srgb_to_linear(fog.sun.color)) * fog.sun.intensity
+        t.msaa.use()
+        t.msaa.clear(0.0, 0.0, 0.0, 1.0, depth=1.0)
+        ctx.disable(moderngl.DEPTH_TEST)
+        sp = self.sky_prog
+        for name, v in (("uFwd", view.fwd), ("uRight", view.right), ("uUp", view.up),
+                        ("uSunDir", sun_dir), ("uSunColor", sun_col),
+                        ("uFlatSkyColor", np.array(srgb_to_linear(scenes.CALIBRATION_SKY)))):
+            _set(sp, name, v)
+        _set(sp, "uFlatSky", fog.scene == "calibration")
+        self.empty_vao[sp].render(moderngl.TRIANGLES, vertices=3)
+        ctx.enable(moderngl.DEPTH_TEST)
+        ctx.disable(moderngl.CULL_FACE)
+        pr = self.scene_prog
+        _set(pr, "uViewProj", view.view_proj)
+        _set(pr, "uSunViewProj", sun_vp)
+        _set(pr, "uEye", view.eye)
+        _set(pr, "uSunDir", sun_dir)
+        _set(pr, "uSunColor", sun_col)
+        _set(pr, "uShadowTexel", 1.0 / SHADOW_SIZE)
+        self.shadow_tex.use(TEX["uShadow"])
+        for scene_vao, _ in vaos:
+            scene_vao.render(moderngl.TRIANGLES)
+        ctx.disable(moderngl.DEPTH_TEST)
+        ctx.copy_framebuffer(t.gbuf, t.msaa)  # MSAA resolve of both attachments
+        t.scene_key = key
+
+    def _set_fog_uniforms(self, prog, fog: FogParams, time: float) -> None:
+        ground = terrain.flat if fog.scene == "calibration" else terrain.height
+        states = {i: simulate(l, time, fog.wind.vector(), ground)
+                  for i, l in enumerate(fog.layers) if isinstance(l, Particles) and l.enabled}
+        n, heads, data, parts = pack(fog, states)
+        _set(prog, "uLayerCount", n)
+        prog["uLayerHead"].write(heads.tobytes()) if "uLayerHead" in prog else None
+        prog["uLayer"].write(data.tobytes()) if "uLayer" in prog else None
+        self.particles.write(parts.tobytes())
+        self.particles.use(TEX["uParticles"])
+        self._noise_tex(fog).use(TEX["uNoise"])
+        e = fog.effects
+        _set(prog, "uWind", fog.wind.vector())
+        _set(prog, "uStartDistance", e.start_distance)
+        _set(prog, "uCutoffDistance", e.cutoff_distance)
+        _set(prog, "uMaxOpacity", e.max_opacity)
+        _set(prog, "uDensityPow", fog.density)
+
+    def render(self, still: StillParams) -> np.ndarray:
+        """The frame as (height, width, 3) uint8 sRGB, top row first."""
+        ctx = self.ctx
+        w, h = still.width, still.height
+        t = self._targets_for(w, h)
+        view = cam.view(still.camera, w, h)
+        self._scene_pass(still, t, view)
+        e = still.effects
+
+        # fog pass at 1/scale
+        fog_fbo, fog_tex = self._fog_target(t, e.fog_scale)
+        fog_fbo.use()
+        fp = self.fog_prog
+        self._set_fog_uniforms(fp, still, still.time)
+        for name, v in (("uEye", view.eye), ("uFwd", view.fwd), ("uRight", view.right), ("uUp", view.up)):
+            _set(fp, name, v)
+        _set(fp, "uScale", e.fog_scale)
+        _set(fp, "uTime", still.time)
+        _set(fp, "uSkyDistance", e.sky_distance)
+        t.invdist.use(TEX["uInvDist"])
+        self.empty_vao[fp].render(moderngl.TRIANGLES, vertices=3)
+
+        # composite (with the blur fused, or followed by separate blur passes)
+        cp = self.composite_prog
+        blur_mode = {"off": 0, "single": 1, "separate": 2}[e.blur]
+        sigma = e.blur_radius * h / 720.0
+        sun_col = np.array(srgb_to_linear(still.sun.color)) * still.sun.intensity
+        for name, v in (("uFwd", view.fwd), ("uRight", view.right), ("uUp", view.up),
+                        ("uFogColor", np.array(srgb_to_linear(still.fog_color))),
+                        ("uSunDir", still.sun.direction()), ("uScatterColor", sun_col * e.scatter)):
+            _set(cp, name, v)
+        for name, v in (("uScale", e.fog_scale), ("uScatterExponent", e.scatter_exponent),
+                        ("uBlurMode", blur_mode), ("uBlurSigma", sigma),
+                        ("uBlurExponent", e.blur_exponent)):
+            _set(cp, name, v)
+        t.color.use(TEX["uColor"])
+        t.invdist.use(TEX["uInvDist"])
+        fog_tex.use(TEX["uFog"])
+        if blur_mode == 2:
+            (fa, ta), (fb, tb) = self._linear_targets(t)
+            fa.use()
+            self.empty_vao[cp].render(moderngl.TRIANGLES, vertices=3)
+            bp = self.blur_prog
+            _set(bp, "uBlurSigma", sigma)
+            _set(bp, "uBlurExponent", e.blur_exponent)
+            for src, dst, direction, final in ((ta, fb, (1.0, 0.0), False), (tb, t.out, (0.0, 1.0), True)):
+                dst.use()
+                src.use(TEX["uImage"])
+                _set(bp, "uDirection", direction)
+                _set(bp, "uFinal", final)
+                self.empty_vao[bp].render(moderngl.TRIANGLES, vertices=3)
+        else:
+            t.out.use()
+            self.empty_vao[cp].render(moderngl.TRIANGLES, vertices=3)
+
+        raw = t.out.read(components=3, alignment=1)
+        return np.frombuffer(raw, np.uint8).reshape(h, w, 3)[::-1]
+
+    def transmittance(self, fog: FogParams, origins, directions, lengths, times) -> np.ndarray:
+        """T of each ray by the fog GLSL (float32). Rays are grouped by time, since the
+        particle state depends on it."""
+        n = len(lengths)
+        out = np.ones(n, np.float32)
+        times = np.asarray(times, dtype=np.float64)
+        for tval in np.unique(times):
+            idx = np.nonzero(times == tval)[0]
+            out[idx] = self._rays(fog, float(tval), np.asarray(origins)[idx],
+                                  np.asarray(directions)[idx], np.asarray(lengths)[idx])
+        return out
+
+    def _rays(self, fog, time, O, W, D) -> np.ndarray:
+        n = len(D)
+        rows = -(-n // RAYS_PER_ROW)
+        data = np.zeros((2 * rows, RAYS_PER_ROW, 4), np.float32)
+        flat = data.reshape(rows, 2, RAYS_PER_ROW, 4)
+        r, c = np.divmod(np.arange(n), RAYS_PER_ROW)
+        flat[r, 0, c, :3], flat[r, 0, c, 3] = O, D
+        flat[r, 1, c, :3], flat[r, 1, c, 3] = W, time
+        rays = self.ctx.texture((RAYS_PER_ROW, 2 * rows), 4, data.tobytes(), dtype="f4")
+        rays.filter = (moderngl.NEAREST, moderngl.NEAREST)
+        target = self.ctx.texture((RAYS_PER_ROW, rows), 1, dtype="f4")
+        fbo = self.ctx.framebuffer(color_attachments=[target])
+        try:
+            fbo.use()
+            rp = self.rays_prog
+            self._set_fog_uniforms(rp, fog, time)
+            _set(rp, "uRayCount", n)
+            rays.use(TEX["uRays"])
+            self.empty_vao[rp].render(moderngl.TRIANGLES, vertices=3)
+            res = np.frombuffer(fbo.read(components=1, dtype="f4", alignment=1), np.float32)
+            return res[:n].copy()
+        finally:
+            fbo.release()
+            target.release()
+            rays.release()

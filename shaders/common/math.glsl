@@ -1,0 +1,24 @@
+// Small numeric helpers shared by the fog layers. Float32 throughout.
+
+const float PI = 3.14159265358979;
+
+// (1 - exp(-x)) / x, with its limit 1 at x = 0. Below |x| < 1e-2 the series is used:
+// 1 - exp(-x) loses ~6e-8 absolute to rounding, i.e. >6e-6 relative there; the
+// 4-term series errs by x^4/120 < 1e-10.
+float expRelNeg(float x) {
+    if (abs(x) < 1e-2) return 1.0 - x * (0.5 - x * (1.0 / 6.0 - x / 24.0));
+    return (1.0 - exp(-x)) / x;
+}
+
+// sin(x) / x with its limit 1 at x = 0 (series below |x| < 1e-3, error x^4/120).
+float sinc(float x) {
+    if (abs(x) < 1e-3) return 1.0 - x * x / 6.0;
+    return sin(x) / x;
+}
+
+// atan2(y, x) / y for y >= 0, with its limit 1/x as y -> 0 (needs x > 0 there, which
+// holds: x = 1 + x0 x1 <= 0 only when the arctangents span more than y > 2).
+float atanRatio(float y, float x) {
+    if (y < 1e-4) return (1.0 - (y * y) / (3.0 * x * x)) / x;
+    return atan(y, x) / y;
+}

@@ -1,0 +1,4 @@
+// OpenGL GL_EXP fog: constant density rho (1/m) over length d (m): tau = rho d.
+float homogeneousOpticalDepth(float rho, float d) {
+    return rho * d;
+}

@@ -1,0 +1,71 @@
+// Composite (Biri eq. 5): C = T C_scene + (1 - T) C_fog, with C_fog tinted by sun
+// in-scattering (Gawron 3.2) and, optionally, the fog blur fused in (Gawron 3.4, single
+// pass: the scene under the fog is blurred with a Gaussian whose sigma follows 1 - T).
+// T comes from the fog target, upsampled with depth awareness when it is smaller.
+#include "common/camera.glsl"
+#include "common/srgb.glsl"
+in vec2 vUV;
+uniform sampler2D uColor;         // scene colour, linear (bilinear filtering)
+uniform sampler2D uInvDist;       // full-resolution 1/distance
+uniform sampler2D uFog;           // (T, 1/distance) at 1/uScale size
+uniform int uScale;
+uniform vec3 uFwd, uRight, uUp;
+uniform vec3 uFogColor;           // linear
+uniform vec3 uSunDir;
+uniform vec3 uScatterColor;       // sun colour * intensity * scatter strength
+uniform float uScatterExponent;
+uniform int uBlurMode;            // 0 off, 1 fused here, 2 separate passes follow
+uniform float uBlurSigma;         // px at full fog
+uniform float uBlurExponent;
+layout(location = 0) out vec4 fColor;
+
+// Gawron Table 1: the 5x5 Gaussian kernel with sigma = 1 (weights sum to ~1).
+const float K5[5] = float[5](0.054488685, 0.244201342, 0.402619947, 0.244201342, 0.054488685);
+
+// Depth-aware upsample (Biri 4.3; "nearest-depth" joint bilateral): the four nearest fog
+// texels weighted bilinearly and by how close their surface is to this pixel's.
+float fogT(ivec2 px, float invd) {
+    if (uScale == 1) return texelFetch(uFog, px, 0).r;
+    ivec2 size = textureSize(uFog, 0);
+    vec2 p = (vec2(px) + 0.5) / float(uScale) - 0.5;
+    ivec2 i0 = ivec2(floor(p));
+    vec2 f = p - vec2(i0);
+    float acc = 0.0, wsum = 0.0, best = 1e9, bestT = 1.0;
+    for (int y = 0; y < 2; ++y) {
+        for (int x = 0; x < 2; ++x) {
+            vec2 s = texelFetch(uFog, clamp(i0 + ivec2(x, y), ivec2(0), size - 1), 0).rg;
+            // relative depth difference in [0, 1]; 1e-6 1/m keeps sky-vs-sky at 0
+            float rel = abs(s.g - invd) / max(max(s.g, invd), 1e-6);
+            float wb = (x == 1 ? f.x : 1.0 - f.x) * (y == 1 ? f.y : 1.0 - f.y);
+            float w = wb * exp(-rel * rel * 400.0);   // ~5% difference halves the weight
+            acc += w * s.r;
+            wsum += w;
+            if (rel < best) { best = rel; bestT = s.r; }
+        }
+    }
+    // no neighbour on this surface (a thin object): take the closest in depth
+    return wsum > 1e-4 ? acc / wsum : bestT;
+}
+
+void main() {
+    ivec2 px = ivec2(gl_FragCoord.xy);
+    vec2 full = vec2(textureSize(uColor, 0));
+    float invd = texelFetch(uInvDist, px, 0).r;
+    float T = fogT(px, invd);
+    vec3 w = viewRay(vUV * 2.0 - 1.0, uFwd, uRight, uUp);
+    vec3 fog = uFogColor + uScatterColor * pow(max(dot(w, uSunDir), 0.0), uScatterExponent);
+    vec3 scene = texelFetch(uColor, px, 0).rgb;
+    if (uBlurMode == 1) {
+        float sigma = uBlurSigma * pow(1.0 - T, uBlurExponent);
+        if (sigma > 0.05) {   // below 0.05 px the kernel is the identity to 8 bits
+            vec3 acc = vec3(0.0);
+            for (int y = 0; y < 5; ++y)
+                for (int x = 0; x < 5; ++x)
+                    acc += K5[x] * K5[y] * texture(uColor, (vec2(px) + 0.5 + vec2(x - 2, y - 2) * sigma) / full).rgb;
+            scene = acc;
+        }
+    }
+    vec3 c = T * scene + (1.0 - T) * fog;
+    if (uBlurMode == 2) fColor = vec4(c, 1.0 - T);     // linear, fog amount for the blur
+    else fColor = vec4(linearToSrgb(c), 1.0);
+}

@@ -1,0 +1,34 @@
+// The countryside ground's albedo (linear) from the world position: grass with low-
+// frequency variation, a gravel road along z = ROAD_Z, sandy river banks, rock on steep
+// slopes. Constants mirror server/fogbank/terrain.py.
+const float ROAD_Z = 0.0;
+const float ROAD_HALF_WIDTH = 3.0;
+
+float hash12(vec2 p) {  // Dave Hoskins' hash without sine, [0, 1)
+    vec3 p3 = fract(vec3(p.xyx) * 0.1031);
+    p3 += dot(p3, p3.yzx + 33.33);
+    return fract((p3.x + p3.y) * p3.z);
+}
+
+float valueNoise(vec2 p) {
+    vec2 i = floor(p), f = fract(p);
+    vec2 u = f * f * (3.0 - 2.0 * f);
+    return mix(mix(hash12(i), hash12(i + vec2(1, 0)), u.x),
+               mix(hash12(i + vec2(0, 1)), hash12(i + vec2(1, 1)), u.x), u.y);
+}
+
+float riverX(float z) { return 10.0 + 22.0 * sin(z / 70.0); }
+
+vec3 terrainAlbedo(vec3 p, vec3 n) {
+    float v = valueNoise(p.xz * 0.05) * 0.6 + valueNoise(p.xz * 0.21) * 0.4;
+    vec3 grass = mix(vec3(0.10, 0.19, 0.05), vec3(0.21, 0.29, 0.08), v);
+    vec3 c = grass;
+    float bank = smoothstep(9.0, 6.5, abs(p.x - riverX(p.z)));
+    c = mix(c, vec3(0.36, 0.31, 0.22), bank);
+    c = mix(c, vec3(0.26, 0.25, 0.23), smoothstep(0.82, 0.7, n.y));
+    // road edge antialiased over one screen pixel
+    float e = abs(p.z - ROAD_Z) - ROAD_HALF_WIDTH;
+    float road = 1.0 - smoothstep(-fwidth(e), fwidth(e), e);
+    vec3 gravel = vec3(0.30, 0.28, 0.25) * (0.9 + 0.2 * valueNoise(p.xz * 1.3));
+    return mix(c, gravel, road);
+}
