@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import hashlib
+import math
 import logging
 from collections import OrderedDict
 from concurrent.futures import ThreadPoolExecutor
@@ -12,7 +13,6 @@ from typing import Any, Literal
 
 import numpy as np
 from fastapi import Body, FastAPI, Request
-from fastapi.encoders import jsonable_encoder
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import FileResponse, JSONResponse, Response
 from fastapi.staticfiles import StaticFiles
@@ -49,14 +49,20 @@ class TransmittanceResponse(BaseModel):
     renderer: str
 
 
+def _clean(e: dict) -> dict:
+    """A JSON-safe error: loc, msg, type, and the offending input when it is small."""
+    out = {"loc": list(e.get("loc", ())), "msg": str(e.get("msg", "")), "type": e.get("type", "")}
+    v = e.get("input")
+    if isinstance(v, (int, str, bool)) and len(str(v)) <= 200:
+        out["input"] = v
+    elif isinstance(v, float):
+        out["input"] = v if math.isfinite(v) else str(v)
+    return out
+
+
 def _validation_error(exc: ValidationError, prefix: tuple) -> RequestValidationError:
-    errors = []
-    for e in exc.errors(include_url=False):
-        e = dict(e)
-        e["loc"] = (*prefix, *e["loc"])
-        e.pop("ctx", None) if not isinstance(e.get("ctx"), dict) else None
-        errors.append(e)
-    return RequestValidationError(jsonable_encoder(errors, custom_encoder={ValueError: str}))
+    return RequestValidationError([dict(e, loc=(*prefix, *e["loc"]))
+                                   for e in exc.errors(include_url=False)])
 
 
 def resolve(patch: dict, cls=StillParams, prefix: tuple = ("body",)):
@@ -97,7 +103,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 
     @app.exception_handler(RequestValidationError)
     async def _422(request: Request, exc: RequestValidationError):
-        return JSONResponse({"detail": jsonable_encoder(exc.errors())}, status_code=422)
+        return JSONResponse({"detail": [_clean(e) for e in exc.errors()]}, status_code=422)
 
     async def _run(fn):
         fut = state["render"].submit(fn)

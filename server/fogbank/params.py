@@ -25,6 +25,7 @@ MAX_LAYERS = 16
 MAX_PARTICLES = 1024
 MAX_COSINE_TERMS = 8
 MAX_POLY_COEFFS = 8
+MAX_PIXELS = 16_000_000
 
 
 def num(default: float, lo: float, hi: float, step: float, unit: str = "", desc: str = "",
@@ -306,9 +307,9 @@ class StillParams(FogParams):
 
     @model_validator(mode="after")
     def _pixels(self) -> "StillParams":
-        if self.width * self.height > 16 * 1024 * 1024:
-            raise ValueError(f"{self.width}x{self.height} is over 16 Mpx "
-                             f"({16 * 1024 * 1024} pixels allowed)")
+        if self.width * self.height > MAX_PIXELS:
+            raise ValueError(f"{self.width}x{self.height} = {self.width * self.height} pixels is "
+                             f"over 16 Mpx (at most {MAX_PIXELS} pixels in all)")
         return self
 
     def fog(self) -> FogParams:

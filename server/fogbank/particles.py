@@ -1,7 +1,8 @@
 """Fischer's particle simulation, deterministic from a seed and the time.
 
 Each of `count` slots runs a cycle of `life_max` steps: a particle is born at the slot's
-staggered offset, lives a random `life_min..life_max` steps, then the slot waits for its
+staggered offset (the emitter has always been running, so t = 0 is already
+in its steady state), lives a random `life_min..life_max` steps, then the slot waits for its
 next cycle. A particle's launch direction (a cone of half-angle `spread`), its life and its
 per-step jitter come from a counter-based hash of (seed, slot, cycle, step), so the state
 at any time t is computed directly, without simulating from t = 0: the same params give
@@ -66,7 +67,7 @@ def simulate(layer: Particles, t: float, wind: np.ndarray,
     age = tau - cycle * period                      # steps since this cycle's birth
     life = layer.life_min + np.floor(
         uniform(layer.seed, slots, cycle, 0) * (layer.life_max - layer.life_min + 1))
-    alive = (tau >= 0) & (age < life)
+    alive = age < life   # cycles before t = 0 count too: the emitter is warm at t = 0
     if not np.any(alive):
         return np.zeros((0, 3)), np.zeros(0)
     slots, cycle, age, life = slots[alive], cycle[alive], age[alive], life[alive]

@@ -18,8 +18,6 @@ class Settings(BaseSettings):
         "auto", description="'auto' and 'egl' use EGL (the GPU where there is one, else llvmpipe); "
         "'default' lets glcontext pick (GLX/WGL/CGL)")
     gl_device: int | None = Field(None, ge=0, description="EGL device index; unset picks the first")
-    max_still_pixels: int = Field(16 * 1024 * 1024, ge=1, description="largest still, in pixels")
-    max_still_side: int = Field(4096, ge=1, description="largest still side, in pixels")
     render_timeout_s: float = Field(60.0, gt=0, description="how long a request waits for the renderer")
     encode_threads: int = Field(2, ge=1, le=32, description="threads that encode images")
 

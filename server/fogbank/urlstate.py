@@ -239,12 +239,14 @@ def _set(cls, value, key, text, errors) -> None:
                 _err(errors, key, f"set {'.'.join(parts[:i + 1])}.kind first", "url_kind")
                 return
             continue
-        if part == "kind" and last and isinstance(node, dict) and not node:
-            # an empty layer: `kind` picks its class and fills its defaults
+        if part == "kind" and last and isinstance(node, dict) and (
+                not node or ("kind" in node and node["kind"] != text)):
+            # a new (or re-kinded) layer: `kind` picks its class and fills its defaults
             if text not in LAYER_CLASSES:
                 _err(errors, key, f"unknown layer kind {text!r}; one of {', '.join(LAYER_CLASSES)}",
                      "url_kind")
                 return
+            node.clear()
             node.update(LAYER_CLASSES[text]().model_dump(mode="json"))
             return
         if not isinstance(node, dict) or ncls is None:

@@ -1,0 +1,160 @@
+"""REST: stills decode to the right size and are deterministic with ETags; every kind of
+bad input gets a 422 naming the field; schema, presets, health."""
+
+from __future__ import annotations
+
+import io
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from fogbank.urlstate import encode
+from fogbank.api import resolve
+from fogbank.params import StillParams
+
+
+def img(resp):
+    return np.asarray(Image.open(io.BytesIO(resp.content)).convert("RGB"))
+
+
+@pytest.mark.parametrize("fmt,mime", [("png", "image/png"), ("jpg", "image/jpeg"), ("webp", "image/webp")])
+def test_still_formats_and_size(client, fmt, mime):
+    r = client.get(f"/api/still.{fmt}?width=160&height=90")
+    assert r.status_code == 200
+    assert r.headers["content-type"] == mime
+    assert img(r).shape == (90, 160, 3)
+
+
+def test_still_is_deterministic_with_etag_and_304(client):
+    q = "/api/still.png?width=200&height=100&camera.yaw=12&time=3"
+    a, b = client.get(q), client.get(q)
+    assert a.content == b.content
+    assert a.headers["etag"] == b.headers["etag"]
+    assert "max-age" in a.headers["cache-control"]
+    assert client.get(q, headers={"If-None-Match": a.headers["etag"]}).status_code == 304
+    other = client.get("/api/still.png?width=200&height=100&camera.yaw=13&time=3")
+    assert other.headers["etag"] != a.headers["etag"]
+
+
+def test_post_still_matches_get(client):
+    body = {"width": 120, "height": 80, "camera": {"yaw": 20.0}, "layers": [{"kind": "sphere"}]}
+    get = client.get("/api/still.png?" + encode(resolve(body)))
+    post = client.post("/api/still?format=png", json=body)
+    assert post.status_code == 200
+    assert np.array_equal(img(get), img(post))
+
+
+def test_url_param_changes_the_picture(client):
+    a = img(client.get("/api/still.png?width=160&height=90"))
+    b = img(client.get("/api/still.png?width=160&height=90&density=3"))
+    assert np.abs(a.astype(int) - b.astype(int)).mean() > 5
+
+
+BAD_QUERIES = [
+    ("layers=1&layers.0.kind=homogeneous&layers.0.density=-1", ["query", "layers", 0, "homogeneous", "density"]),
+    ("layers=1&layers.0.kind=cosine&layers.0.c0=0.1", ["query", "layers", 0, "cosine"]),
+    ("layers=1&layers.0.kind=polynomial&layers.0.coeffs=-1,0,1", ["query", "layers", 0, "polynomial"]),
+    ("camera.yaw=nan", ["query", "camera", "yaw"]),
+    ("camera.fov=inf", ["query", "camera", "fov"]),
+    ("layers=1&layers.0.kind=fluffy", ["query", "layers.0.kind"]),
+    ("width=5000", ["query", "width"]),
+    ("width=4096&height=4096&v=1", ["query"]),   # 16.8 Mpx
+    ("layers=2&layers.0.kind=particles&layers.0.count=1000&layers.1.kind=particles&layers.1.count=100",
+     ["query"]),
+    ("a=1&&&=", ["query"]),
+    ("camera.zoom=3", ["query", "camera", "zoom"]),
+    ("v=9", ["query", "v"]),
+    ("preset=nope", ["query", "preset"]),
+    ("layers.9.density=1", ["query", "layers.9.density"]),
+    ("layers.3.density=1", ["query", "layers", 3, "particles", "density"]),
+    ("effects.fog_scale=3", ["query", "effects", "fog_scale"]),
+]
+
+
+@pytest.mark.parametrize("query,loc", BAD_QUERIES)
+def test_bad_queries_get_422_naming_the_field(client, query, loc):
+    r = client.get("/api/still.png?" + query)
+    assert r.status_code == 422, r.text
+    detail = r.json()["detail"]
+    assert isinstance(detail, list) and detail
+    assert any(list(d["loc"])[:len(loc)] == loc for d in detail), detail
+    assert all(d["msg"] for d in detail)
+
+
+def test_too_many_layers(client):
+    body = {"layers": [{"kind": "homogeneous"}] * 17}
+    r = client.post("/api/still", json=body)
+    assert r.status_code == 422
+    assert r.json()["detail"][0]["loc"][:2] == ["body", "layers"]
+    assert "16" in r.json()["detail"][0]["msg"]
+
+
+def test_over_16_megapixels(client):
+    r = client.post("/api/still", json={"width": 4096, "height": 3907})
+    assert r.status_code == 422
+    assert "16 Mpx" in r.json()["detail"][0]["msg"]
+    assert StillParams(width=4000, height=4000).width == 4000   # exactly 16 Mpx is allowed
+
+
+def test_bad_json_bodies(client):
+    for body, loc in [({"camera": {"yaw": "north"}}, ["body", "camera", "yaw"]),
+                      ({"layers": [{"kind": "sphere", "radius": 0}]}, ["body", "layers", 0, "sphere", "radius"]),
+                      ([1, 2], ["body"])]:
+        r = client.post("/api/still", json=body)
+        assert r.status_code == 422, r.text
+        assert any(list(d["loc"])[:len(loc)] == loc for d in r.json()["detail"])
+    r = client.post("/api/still", content=b'{"density": NaN}', headers={"content-type": "application/json"})
+    assert r.status_code == 422
+    r = client.post("/api/still", content=b'{"density": ', headers={"content-type": "application/json"})
+    assert r.status_code == 422
+
+
+def test_transmittance_errors(client):
+    ray = {"origin": [0, 0, 0], "direction": [0, 0, 0], "length": 1}
+    r = client.post("/api/transmittance", json={"rays": [ray]})
+    assert r.status_code == 422
+    assert r.json()["detail"][0]["loc"] == ["body", "rays", 0, "direction"]
+    r = client.post("/api/transmittance", json={"rays": []})
+    assert r.status_code == 422
+    r = client.post("/api/transmittance", json={"params": {"layers": [{"kind": "x"}]},
+                                                "rays": [dict(ray, direction=[1, 0, 0])]})
+    assert r.status_code == 422
+    assert r.json()["detail"][0]["loc"][:3] == ["body", "params", "layers"]
+
+
+def test_renderer_survives_bad_input(client):
+    """After a burst of bad requests, a good one still renders."""
+    for q, _ in BAD_QUERIES:
+        client.get("/api/still.png?" + q)
+    assert client.get("/api/still.png?width=64&height=64").status_code == 200
+
+
+def test_schema_has_ranges_steps_units(client):
+    s = client.get("/api/schema").json()
+    defs = s["$defs"]
+    yaw = defs["Camera"]["properties"]["yaw"]
+    assert yaw["minimum"] == -360 and yaw["maximum"] == 360 and yaw["step"] == 0.5 and yaw["unit"] == "deg"
+    assert "discriminator" in str(s["properties"]["layers"]) or "oneOf" in str(s["properties"]["layers"])
+    assert s["properties"]["width"]["maximum"] == 4096
+
+
+def test_presets_and_their_queries_render(client):
+    ps = client.get("/api/presets").json()
+    names = {p["name"] for p in ps}
+    assert {"default", "biri-fig6", "biri-fig7", "biri-fig8", "quilez-spheres", "fischer-fog",
+            "fischer-smoke", "perlin-fog", "gawron-distance"} <= names
+    for p in ps:
+        r = client.get(f"/api/still.jpg?{p['query']}&width=96&height=54")
+        assert r.status_code == 200, (p["name"], r.text)
+
+
+def test_healthz_names_renderer(client):
+    h = client.get("/healthz").json()
+    assert h["status"] == "ok"
+    assert h["renderer"] and h["gl_version"]
+
+
+def test_docs(client):
+    assert client.get("/docs").status_code == 200
+    assert "/api/still" in client.get("/openapi.json").json()["paths"]

@@ -1,0 +1,147 @@
+"""Rendered frames against independent references: the calibration scene's pixels against
+the blend of scene colour and fog colour by the reference T, computed from an analytic
+ray cast in float64; plus determinism, fog scale and blur sanity."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from fogbank import camera as cam
+from fogbank import scene as scenes
+from fogbank.fog.transmittance import transmittance as reference
+from fogbank.params import StillParams, srgb_to_linear
+
+W, H = 320, 180
+
+
+def _to_srgb(c):
+    c = np.clip(c, 0, 1)
+    return np.where(c <= 0.0031308, c * 12.92, 1.055 * c ** (1 / 2.4) - 0.055) * 255
+
+
+def _cast(eye, w):
+    """Nearest hit of rays w from eye with the calibration scene: (distance, object index);
+    index -1 is the sky, 0 the ground, 1.. the boxes."""
+    n = len(w)
+    best = np.full(n, np.inf)
+    obj = np.full(n, -1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = -eye[1] / w[:, 1]
+    hit = (t > 0) & (np.abs(eye[0] + t * w[:, 0]) < 2000) & (np.abs(eye[2] + t * w[:, 2]) < 2000)
+    best = np.where(hit, t, best)
+    obj = np.where(hit, 0, obj)
+    for i, (lo, hi, _) in enumerate(scenes.CALIBRATION_BOXES, start=1):
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t0 = (np.array(lo) - eye) / w
+            t1 = (np.array(hi) - eye) / w
+        tmin = np.nanmax(np.minimum(t0, t1), axis=1)
+        tmax = np.nanmin(np.maximum(t0, t1), axis=1)
+        h = (tmax >= tmin) & (tmin > 0) & (tmin < best)
+        best = np.where(h, tmin, best)
+        obj = np.where(h, i, obj)
+    return best, obj
+
+
+def calibration_still(**fog):
+    base = dict(scene="calibration", width=W, height=H,
+                camera={"position": (0.0, 6.0, 0.0), "yaw": 0.0, "pitch": -6.0, "fov": 60.0},
+                effects={"scatter": 0.0, "sky_distance": 400.0}, fog_color="#c0c8d0")
+    base.update(fog)
+    return StillParams.model_validate(base)
+
+
+@pytest.mark.parametrize("layers", [
+    [{"kind": "homogeneous", "density": 0.012}],
+    [{"kind": "height", "density": 0.05, "falloff": 0.2, "base": 0.0},
+     {"kind": "sphere", "center": (0.0, 3.0, -40.0), "radius": 15.0, "density": 0.08}],
+    [{"kind": "cosine", "density": 0.01, "c0": 1.0, "scale": 10.0,
+      "terms": [{"amp": 0.8, "k": (1.0, 2.0, 0.5), "phase": 0.3}]},
+     {"kind": "distance", "start": 5.0, "distance": 150.0, "exponent": 0.8, "low": 0.5,
+      "high": 0.9, "max": 0.7, "noise_scale": 40.0}],
+])
+def test_calibration_pixels_match_reference_blend(renderer, layers):
+    still = calibration_still(layers=layers)
+    img = renderer.render(still).astype(np.float64)
+    view = cam.view(still.camera, W, H)
+    py, px = np.mgrid[0:H, 0:W]
+    gl_y = H - 1 - py                                  # image rows are top first
+    w = view.ray(px.ravel(), gl_y.ravel(), W, H)
+    d, obj = _cast(view.eye, w)
+    obj = obj.reshape(H, W)
+    # interior pixels only: the 3x3 neighbourhood sees the same object (MSAA edges excluded)
+    same = np.ones((H, W), bool)
+    for dy in (-1, 0, 1):
+        for dx in (-1, 0, 1):
+            same &= np.roll(np.roll(obj, dy, 0), dx, 1) == obj
+    same[[0, -1], :] = False
+    same[:, [0, -1]] = False
+    sel = same.ravel()
+    d = np.where(obj.ravel() == -1, still.effects.sky_distance, d)[sel]
+    T = reference(still.fog(), np.broadcast_to(view.eye, (sel.sum(), 3)), w[sel], d, still.time)
+    albedo = {-1: scenes.CALIBRATION_SKY, 0: scenes.CALIBRATION_GROUND}
+    albedo.update({i: c for i, (_, _, c) in enumerate(scenes.CALIBRATION_BOXES, start=1)})
+    scene_lin = np.array([srgb_to_linear(albedo[o]) for o in obj.ravel()[sel]])
+    fog_lin = np.array(srgb_to_linear(still.fog_color))
+    want = _to_srgb(T[:, None] * scene_lin + (1 - T[:, None]) * fog_lin)
+    got = img.reshape(-1, 3)[sel]
+    err = np.abs(got - want)
+    assert sel.sum() > 0.8 * W * H
+    assert set(np.unique(obj[same])) == {-1, 0, 1, 2, 3, 4}    # every object is checked
+    assert err.max() <= 2.0, (err.max(), np.unravel_index(err.argmax(), err.shape))
+
+
+def test_same_params_same_pixels(renderer):
+    still = StillParams(width=W, height=H, layers=[{"kind": "height"}, {"kind": "particles"}], time=3.0)
+    a = renderer.render(still)
+    renderer.render(still.model_copy(update={"time": 9.0}))
+    b = renderer.render(still)
+    assert np.array_equal(a, b)
+
+
+def test_fog_changes_the_picture_and_density_zero_removes_it(renderer):
+    clear = StillParams(width=W, height=H, layers=[])
+    foggy = StillParams(width=W, height=H, layers=[{"kind": "homogeneous", "density": 0.05}])
+    none = foggy.model_copy(update={"density": 0.0})
+    a, b, c = (renderer.render(s).astype(int) for s in (clear, foggy, none))
+    assert np.abs(a - b).mean() > 20
+    assert np.array_equal(a, c)
+
+
+@pytest.mark.parametrize("scale", [2, 4])
+def test_fog_scale_upsample_close_to_full_resolution(renderer, scale):
+    base = calibration_still(layers=[{"kind": "height", "density": 0.05, "falloff": 0.1}])
+    full = renderer.render(base).astype(int)
+    low = renderer.render(base.model_copy(update={"effects": base.effects.model_copy(
+        update={"fog_scale": scale})})).astype(int)
+    diff = np.abs(full - low).max(axis=2)
+    # the depth-aware upsample keeps object edges: almost every pixel within 3/255
+    assert np.mean(diff <= 3) > 0.97
+    assert np.percentile(diff, 99.5) <= 12
+
+
+@pytest.mark.parametrize("mode", ["single", "separate"])
+def test_blur_softens_edges_only_where_there_is_fog(renderer, mode):
+    base = calibration_still(layers=[{"kind": "homogeneous", "density": 0.03}])
+    sharp = renderer.render(base).astype(float)
+    eff = base.effects.model_copy(update={"blur": mode, "blur_radius": 16.0})
+    soft = renderer.render(base.model_copy(update={"effects": eff})).astype(float)
+    diff = np.abs(soft - sharp).max(axis=2)
+    # object edges change (sigma is ~2.4 px at the red box), flat interiors do not
+    flat = (np.abs(np.diff(sharp, axis=0, prepend=sharp[:1])).max(axis=2) < 1) & \
+           (np.abs(np.diff(sharp, axis=1, prepend=sharp[:, :1])).max(axis=2) < 1)
+    interior = flat.copy()
+    for k in range(1, 8):   # 7 px away from any edge
+        interior &= np.roll(flat, k, 0) & np.roll(flat, -k, 0) & np.roll(flat, k, 1) & np.roll(flat, -k, 1)
+    # single blurs the scene under the fog (flat here); separate blurs the foggy image,
+    # whose fog ramp along the ground is curved, so a Gaussian moves it a little
+    assert diff[interior].max() <= (2 if mode == "single" else 5)
+    assert diff.max() >= 10
+    if mode == "separate":   # blurring the foggy image lowers its gradient energy
+        def energy(img):
+            return (np.diff(img.mean(axis=2), axis=1) ** 2).sum()
+        assert energy(soft) < 0.8 * energy(sharp)
+    # no fog: no blur
+    clear = base.model_copy(update={"layers": []})
+    assert np.array_equal(renderer.render(clear),
+                          renderer.render(clear.model_copy(update={"effects": eff})))

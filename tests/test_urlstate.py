@@ -1,0 +1,88 @@
+"""The URL codec: round trips (property-based), canonical form, readable output."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from draws import ALL, random_layer
+from fogbank import presets as P
+from fogbank.params import FogParams, StillParams
+from fogbank.urlstate import URLError, canonical, decode, encode
+
+finite = st.floats(allow_nan=False, allow_infinity=False, width=64)
+
+
+@st.composite
+def looks(draw):
+    seed = draw(st.integers(0, 2**32 - 1))
+    rng = np.random.default_rng(seed)
+    base = FogParams.model_validate(P.preset_dict(draw(st.sampled_from(sorted(P.presets())))))
+    layers = base.layers if draw(st.booleans()) else [
+        random_layer(draw(st.sampled_from(ALL)), rng) for _ in range(draw(st.integers(0, 5)))]
+    return StillParams.model_validate({
+        **base.model_dump(), "layers": [l.model_dump() for l in layers],
+        "camera": {"position": (draw(st.floats(-300, 300)), draw(st.floats(-50, 300)), draw(st.floats(-300, 300))),
+                   "yaw": draw(st.floats(-360, 360)), "pitch": draw(st.floats(-89, 89)),
+                   "fov": draw(st.floats(10, 120))},
+        "time": draw(st.floats(0, 1e6)), "density": draw(st.floats(0, 20)),
+        "fog_color": "#%06x" % draw(st.integers(0, 0xFFFFFF)),
+        "effects": {"fog_scale": draw(st.sampled_from([1, 2, 4])),
+                    "blur": draw(st.sampled_from(["off", "single", "separate"]))},
+        "width": draw(st.integers(1, 4096)), "height": draw(st.integers(1, 3000)),
+    })
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(looks(), st.sampled_from(sorted(P.presets())))
+def test_params_url_params_is_identity(still, base):
+    q = encode(still, base)
+    value, got_base = decode(q, StillParams)
+    assert got_base == base
+    assert StillParams.model_validate(value) == still
+    assert canonical(q, StillParams) == q   # the encoding is already canonical
+
+
+@settings(max_examples=100, deadline=None)
+@given(looks())
+def test_url_params_url_gives_canonical(still):
+    q = encode(still)
+    # shuffled order, a redundant default, and an explicit version give the same canonical URL
+    parts = q.split("&")
+    shuffled = "&".join(parts[1:][::-1] + [parts[0]])
+    noisy = shuffled + ("&scene=countryside" if "scene=" not in q else "")
+    assert canonical(noisy, StillParams) == q
+
+
+def test_defaults_are_left_out_and_readable():
+    assert encode(FogParams.model_validate(P.preset_dict("default"))) == "v=1"
+    p = FogParams.model_validate({**P.preset_dict("default"), "camera": {"position": (1, 2, 3), "yaw": 10.5,
+                                                                          "pitch": -10, "fov": 60}})
+    assert encode(p) == "v=1&camera.position=1,2,3&camera.yaw=10.5"
+    p = FogParams.model_validate({**P.preset_dict("default"), "fog_color": "#aabbcc",
+                                  "layers": [{"kind": "sphere", "radius": 3.5}]})
+    assert encode(p) == "v=1&fog_color=aabbcc&layers=1&layers.0.kind=sphere&layers.0.radius=3.5"
+
+
+def test_same_query_on_page_and_still():
+    value, _ = decode("camera.yaw=7&width=640", StillParams)
+    assert value["width"] == 640 and value["camera"]["yaw"] == 7.0
+    value, _ = decode("camera.yaw=7", FogParams)
+    assert "width" not in value
+
+
+@pytest.mark.parametrize("q", ["%", "a", "layers=x", "layers=100000", "v=2", "layers.0.kind=fog",
+                               "layers=1&layers.0.radius=3", "camera.yaw=1&camera.yaw=2", "x" * 20000])
+def test_malformed(q):
+    with pytest.raises(URLError) as exc:
+        decode(q)
+    assert exc.value.errors and all(e["loc"][0] == "query" for e in exc.value.errors)
+
+
+def test_presets_round_trip_from_their_own_base():
+    for name in P.presets():
+        p = FogParams.model_validate(P.preset_dict(name))
+        assert encode(p, name) == f"v=1&preset={name}" if name != "default" else encode(p) == "v=1"
+        assert FogParams.model_validate(decode(encode(p))[0]) == p
