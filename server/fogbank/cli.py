@@ -53,6 +53,8 @@ def cmd_still(args) -> None:
 
 def cmd_gallery(args) -> None:
     """Render every preset at --width x --height as JPEG, timing each (median of --repeat)."""
+    import numpy as np
+
     from .encode import encode
     from .params import StillParams
     from .presets import preset_dict, presets
@@ -75,6 +77,11 @@ def cmd_gallery(args) -> None:
             r.render(cold)
             times.append(time.perf_counter() - t0)
         img = r.render(still)
+        if args.thumb and args.thumb < args.width:   # small JPEGs for the README
+            from PIL import Image
+            th = Image.fromarray(img).resize((args.thumb, round(args.thumb * args.height / args.width)),
+                                             Image.LANCZOS)
+            img = np.asarray(th)
         (out / f"{name}.jpg").write_bytes(encode(img, "jpg", quality=82))
         med = sorted(times)[len(times) // 2]
         rows.append({"preset": name, "ms": round(med * 1000, 1)})
@@ -101,6 +108,7 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--width", type=int, default=1280)
     p.add_argument("--height", type=int, default=720)
     p.add_argument("--repeat", type=int, default=5)
+    p.add_argument("--thumb", type=int, default=640, help="width of the saved JPEGs (0 = full)")
     p.set_defaults(fn=cmd_gallery)
     args = ap.parse_args(argv)
     args.fn(args)

@@ -37,7 +37,7 @@ def _presets() -> dict[str, dict[str, Any]]:
     hx, hy, hz = landmarks().house
     bx, by, bz = landmarks().bridge
     fx, fy, fz = landmarks().forest
-    view = {"position": (-15.0, 24.8, 80.0), "yaw": 5.0, "pitch": -10.0, "fov": 60.0}
+    view = {"position": (-15.0, 34.0, 95.0), "yaw": 5.0, "pitch": -13.0, "fov": 60.0}
     house_view = {"position": (-58.0, 22.0, 12.0), "yaw": 25.0, "pitch": -8.0, "fov": 55.0}
     smoke = {"kind": "particles", "count": 64, "emitter": _house_chimney(), "direction": (0.0, 1.0, 0.0),
              "spread": 12.0, "speed": 2.2, "life_min": 8, "life_max": 16, "step": 0.45,
@@ -51,11 +51,11 @@ def _presets() -> dict[str, dict[str, Any]]:
             "params": {
                 "camera": view, "fog_color": "#c9d1db",
                 "sun": {"azimuth": 55.0, "elevation": 16.0, "color": "#ffe3b8", "intensity": 3.2},
-                "effects": {"scatter": 0.12, "scatter_exponent": 12.0, "sky_distance": 900.0,
+                "effects": {"scatter": 0.12, "scatter_exponent": 12.0, "sky_distance": 350.0,
                             "fog_scale": 1},
                 "layers": [
-                    {"kind": "height", "density": 0.05, "falloff": 0.16, "base": 1.0},
-                    _biri_fig6_layer(0.004, 24.0),
+                    {"kind": "height", "density": 0.035, "falloff": 0.2, "base": 1.0},
+                    _biri_fig6_layer(0.0025, 24.0),
                     {"kind": "potential", "shape": "point", "center": (fx, fy, fz), "strength": 0.6,
                      "c": 30.0, "e": 0.05},
                     smoke,
