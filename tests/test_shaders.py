@@ -38,11 +38,17 @@ def test_compile_error_names_file_and_line(renderer, tmp_path, monkeypatch):
     (tmp_path / "bad.frag").write_text('#include "lib.glsl"\nout vec4 c;\nvoid main() { c = vec4(f()); }\n')
     monkeypatch.setattr(sh, "SHADER_DIR", tmp_path)
     real_load = sh.load
-    monkeypatch.setattr(sh, "load", lambda name, defines=None: real_load(name, defines, root=tmp_path))
+    monkeypatch.setattr(sh, "load", lambda name, defines=None, generated=None: real_load(name, defines, root=tmp_path, generated=generated))
     with pytest.raises(ShaderError) as exc:
         program(renderer.ctx, "ok.vert", "bad.frag")
     assert "lib.glsl:4" in str(exc.value)
 
 
 def test_every_project_shader_compiles(renderer):
-    assert isinstance(renderer.fog_prog, moderngl.Program)
+    from fogbank.params import FogParams
+    from fogbank.presets import preset_dict, presets
+    for name in presets():
+        fog = FogParams.model_validate(preset_dict(name))
+        for scale in (1, 2, 4):
+            assert isinstance(renderer.fog_program(fog, scale), moderngl.Program)
+        assert isinstance(renderer.rays_program(fog), moderngl.Program)

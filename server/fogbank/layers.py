@@ -1,7 +1,10 @@
-"""Packs a fog's layers into the uniforms of shaders/fog/transmittance.glsl.
+"""Packs a fog's layers into the uniforms of shaders/fog/transmittance.glsl, and writes
+the GLSL that calls each layer's function (fog/layers.gen.glsl).
 
-One layer is LAYER_VEC4 vec4s plus an ivec4 header (kind, wind-sensitive, count, 0); the
-comments in transmittance.glsl give each kind's slots. Particle positions go to a texture.
+One layer is LAYER_VEC4 vec4s of uLayer; `_CODE` below gives each kind's slots. Particle
+positions go to a texture. The generated code depends only on `variant(fog)` (the kinds,
+their wind flags and term counts), so one compiled program serves every value of the
+parameters; the renderer caches programs by that key.
 """
 
 from __future__ import annotations
@@ -13,15 +16,79 @@ from .params import (MAX_LAYERS, MAX_PARTICLES, Cosine, Distance, FogParams, Hei
                      Homogeneous, Noise, Particles, Polynomial, Potential, Sphere)
 
 LAYER_VEC4 = 12
-KINDS = ["homogeneous", "height", "cosine", "polynomial", "potential", "sphere", "particles",
-         "noise", "distance"]
 DEFINES = {"MAX_LAYERS": MAX_LAYERS, "LAYER_VEC4": LAYER_VEC4}
 
 
+# GLSL per kind; {b} is the layer's first uLayer index, {O} the (slid) eye point.
+_CODE = {
+    # p0 = (density)
+    "homogeneous": "tau += homogeneousOpticalDepth(uLayer[{b}].x, ds);",
+    # p0 = (density, falloff, base)
+    "height": "tau += heightOpticalDepth({O}, w, ds, uLayer[{b}].x, uLayer[{b}].y, uLayer[{b}].z);",
+    # p0 = (axis, offset); p1 = (density, C, repeat, period); p2, p3 coefficients; p4, p5 Q
+    "polynomial": "tau += uLayer[{b1}].x * polynomialOpticalDepth({O}, w, ds, uLayer[{b}].xyz, "
+                  "uLayer[{b}].w, uLayer[{b1}].y, uLayer[{b1}].z > 0.5, uLayer[{b1}].w, "
+                  "uLayer[{b2}], uLayer[{b3}], uLayer[{b4}], uLayer[{b5}]);",
+    # p0 = (center, strength); p1 = (unit axis or 0, c); p2.x = e
+    "potential": "tau += potentialOpticalDepth({O}, w, ds, uLayer[{b}].xyz, uLayer[{b1}].xyz, "
+                 "uLayer[{b}].w, uLayer[{b1}].w, uLayer[{b2}].x);",
+    # p0 = (center, radius); p1.x = density
+    "sphere": "tau += sphereOpticalDepth({O}, w, ds, uLayer[{b}].xyz, uLayer[{b}].w, uLayer[{b1}].x);",
+    # p0 = (alpha, radius, first particle, count)
+    "particles": "for (int j = 0; j < int(uLayer[{b}].w); ++j) {{ "
+                 "vec4 q = texelFetch(uParticles, ivec2(int(uLayer[{b}].z) + j, 0), 0); "
+                 "T *= particleClarity(Os, w, ds, q.xyz, uLayer[{b}].y, q.w, uLayer[{b}].x); }}",
+    # p0 = (density, 1/scale, -, samples); p1 = (falloff flag, 1/falloff scale)
+    "noise/surface": "tau += noiseSurfaceOpticalDepth(uNoise, Os, P, P - ({S}), ds, uLayer[{b}].x, "
+                     "uLayer[{b}].y, uLayer[{b1}].x > 0.5, uLayer[{b1}].y);",
+    "noise/volume": "tau += noiseVolumeOpticalDepth(uNoise, {O}, w, ds, uLayer[{b}].x, uLayer[{b}].y, "
+                    "int(uLayer[{b}].w));",
+    # p0 = (start, 1/D, exponent, max); p1 = (low, high, 1/noise scale)
+    "distance": "T *= distanceTransmittance(ds, noiseSample(uNoise, P - ({S}), uLayer[{b1}].z), "
+                "uLayer[{b}].x, uLayer[{b}].y, uLayer[{b}].z, uLayer[{b}].w, uLayer[{b1}].x, "
+                "uLayer[{b1}].y);",
+}
+
+
+def variant(fog: FogParams) -> tuple:
+    """What the generated GLSL depends on: per enabled layer, its kind (with the noise
+    mode), its wind flag, and its number of cosine terms."""
+    key = []
+    for layer in fog.layers:
+        if not layer.enabled:
+            continue
+        kind = f"noise/{layer.mode}" if isinstance(layer, Noise) else layer.kind
+        terms = len(layer.terms) if isinstance(layer, Cosine) else 0
+        key.append((kind, layer.wind, terms))
+    return tuple(key)
+
+
+def layer_code(key: tuple) -> str:
+    """The body of fog/layers.gen.glsl for a variant key."""
+    lines = []
+    for i, (kind, wind, terms) in enumerate(key):
+        b = i * LAYER_VEC4
+        S = "slide" if wind else "vec3(0.0)"
+        O = "(Os - slide)" if wind else "Os"
+        idx = {f"b{k}": b + k for k in range(1, LAYER_VEC4)}
+        lines.append(f"// layer {i}: {kind}{' (wind)' if wind else ''}")
+        if kind == "cosine":
+            # p0 = (density, c0, 1/scale, -); uLayer[b+1+j] = (k_j, phase_j); amps at b+9, b+10
+            body = [f"float acc = uLayer[{b}].y * ds;", f"vec3 Ou = {O} * uLayer[{b}].z;",
+                    f"vec3 wu = w * uLayer[{b}].z;"]
+            for j in range(terms):
+                body.append(f"acc += cosineTermOpticalDepth(Ou, wu, ds, uLayer[{b + 1 + j}].xyz, "
+                            f"uLayer[{b + 1 + j}].w, uLayer[{b + 9 + j // 4}][{j % 4}]);")
+            body.append(f"tau += uLayer[{b}].x * acc;")
+            lines.append("{ " + " ".join(body) + " }")
+        else:
+            lines.append(_CODE[kind].format(b=b, O=O, S=S, **idx))
+    return "\n".join(lines) + "\n"
+
+
 def pack(fog: FogParams, particle_states: dict[int, tuple[np.ndarray, np.ndarray]]):
-    """Returns (count, heads int32 (MAX_LAYERS, 4), data float32 (MAX_LAYERS*LAYER_VEC4, 4),
-    particles float32 (MAX_PARTICLES, 4))."""
-    heads = np.zeros((MAX_LAYERS, 4), np.int32)
+    """Returns (uLayer data float32 (MAX_LAYERS*LAYER_VEC4, 4), particles float32
+    (MAX_PARTICLES, 4)) for the enabled layers, in the order of `variant(fog)`."""
     data = np.zeros((MAX_LAYERS * LAYER_VEC4, 4), np.float64)
     parts = np.zeros((MAX_PARTICLES, 4), np.float64)
     n = 0
@@ -30,13 +97,11 @@ def pack(fog: FogParams, particle_states: dict[int, tuple[np.ndarray, np.ndarray
         if not layer.enabled:
             continue
         v = data[n * LAYER_VEC4:(n + 1) * LAYER_VEC4]
-        count = 0
         if isinstance(layer, Homogeneous):
             v[0, 0] = layer.density
         elif isinstance(layer, Height):
             v[0, :3] = (layer.density, layer.falloff, layer.base)
         elif isinstance(layer, Cosine):
-            count = len(layer.terms)
             v[0, :3] = (layer.density, layer.c0, 1.0 / layer.scale)
             for j, t in enumerate(layer.terms):
                 v[1 + j] = (*t.k, t.phase)
@@ -67,7 +132,7 @@ def pack(fog: FogParams, particle_states: dict[int, tuple[np.ndarray, np.ndarray
             count = len(pos)
             parts[first:first + count, :3] = pos
             parts[first:first + count, 3] = strength
-            v[0, :3] = (layer.alpha, layer.radius, first)
+            v[0] = (layer.alpha, layer.radius, first, count)
             first += count
         elif isinstance(layer, Noise):
             v[0] = (layer.density, 1.0 / layer.scale, 1.0 if layer.mode == "volume" else 0.0,
@@ -76,6 +141,5 @@ def pack(fog: FogParams, particle_states: dict[int, tuple[np.ndarray, np.ndarray
         elif isinstance(layer, Distance):
             v[0] = (layer.start, 1.0 / layer.distance, layer.exponent, layer.max)
             v[1, :3] = (layer.low, layer.high, 1.0 / layer.noise_scale)
-        heads[n] = (KINDS.index(layer.kind), 1 if layer.wind else 0, count, 0)
         n += 1
-    return n, heads, data.astype(np.float32), parts.astype(np.float32)
+    return data.astype(np.float32), parts.astype(np.float32)

@@ -16,7 +16,9 @@ import numpy as np
 from . import camera as cam
 from . import scene as scenes
 from . import terrain
-from .layers import DEFINES, pack
+from collections import OrderedDict
+
+from .layers import DEFINES, layer_code, pack, variant
 from .noise import bake
 from .params import MAX_PARTICLES, FogParams, Particles, StillParams, srgb_to_linear
 from .particles import simulate
@@ -67,20 +69,12 @@ class Targets:
 class Renderer:
     def __init__(self, ctx: moderngl.Context):
         self.ctx = ctx
-        p = lambda v, f, **d: program(ctx, v, f, {**DEFINES, **d})  # noqa: E731
-        self.sky_prog = p("passes/fullscreen.vert", "passes/sky.frag")
-        self.scene_prog = p("passes/scene.vert", "passes/scene.frag")
-        self.shadow_prog = p("passes/shadow.vert", "passes/shadow.frag")
-        self.fog_prog = p("passes/fullscreen.vert", "passes/fog.frag")
-        self.rays_prog = p("passes/fullscreen.vert", "passes/rays.frag", RAYS_PER_ROW=RAYS_PER_ROW)
-        self.composite_prog = p("passes/fullscreen.vert", "passes/composite.frag")
-        self.blur_prog = p("passes/fullscreen.vert", "passes/blur.frag")
-        self.empty_vao = {prog: ctx.vertex_array(prog, []) for prog in (
-            self.sky_prog, self.fog_prog, self.rays_prog, self.composite_prog, self.blur_prog)}
-        for prog in (self.scene_prog, self.fog_prog, self.rays_prog, self.composite_prog,
-                     self.blur_prog, self.sky_prog):
-            for name, unit in TEX.items():
-                _set(prog, name, unit)
+        self.empty_vao: dict = {}
+        self._programs: OrderedDict = OrderedDict()
+        self.sky_prog = self._program("passes/fullscreen.vert", "passes/sky.frag")
+        self.scene_prog = self._program("passes/scene.vert", "passes/scene.frag")
+        self.shadow_prog = self._program("passes/shadow.vert", "passes/shadow.frag")
+        self.blur_prog = self._program("passes/fullscreen.vert", "passes/blur.frag")
         self.particles = ctx.texture((MAX_PARTICLES, 1), 4, dtype="f4")
         self.particles.filter = (moderngl.NEAREST, moderngl.NEAREST)
         self.shadow_tex = ctx.depth_texture((SHADOW_SIZE, SHADOW_SIZE))
@@ -92,6 +86,41 @@ class Renderer:
         self._targets: dict[tuple[int, int], Targets] = {}
         self._noise: dict[tuple, moderngl.Texture] = {}
         self._rays_fbo: tuple | None = None
+
+    # ------------------------------------------------------------ programs
+
+    def _program(self, vert: str, frag: str, layers: tuple | None = None, **defines):
+        """A compiled program, cached by its sources, defines and fog layer variant.
+        Fullscreen programs get an empty VAO; texture units are set once."""
+        key = (vert, frag, layers, tuple(sorted(defines.items())))
+        if key in self._programs:
+            self._programs.move_to_end(key)
+            return self._programs[key]
+        generated = {"fog/layers.gen.glsl": layer_code(layers)} if layers is not None else None
+        prog = program(self.ctx, vert, frag, {**DEFINES, **defines}, generated)
+        for name, unit in TEX.items():
+            _set(prog, name, unit)
+        if vert == "passes/fullscreen.vert":
+            self.empty_vao[prog] = self.ctx.vertex_array(prog, [])
+        self._programs[key] = prog
+        while len(self._programs) > 48:   # fog variants come and go; keep the recent ones
+            _, old = self._programs.popitem(last=False)
+            vao = self.empty_vao.pop(old, None)
+            if vao is not None:
+                vao.release()
+            old.release()
+        return prog
+
+    def fog_program(self, fog: FogParams, scale: int):
+        return self._program("passes/fullscreen.vert", "passes/fog.frag", variant(fog), FOG_SCALE=scale)
+
+    def rays_program(self, fog: FogParams):
+        return self._program("passes/fullscreen.vert", "passes/rays.frag", variant(fog),
+                             RAYS_PER_ROW=RAYS_PER_ROW)
+
+    def composite_program(self, scale: int, blur_mode: int):
+        return self._program("passes/fullscreen.vert", "passes/composite.frag",
+                             FOG_SCALE=scale, BLUR_MODE=blur_mode)
 
     # ------------------------------------------------------------ info
 
@@ -223,10 +252,10 @@ class Renderer:
         ground = terrain.flat if fog.scene == "calibration" else terrain.height
         states = {i: simulate(l, time, fog.wind.vector(), ground)
                   for i, l in enumerate(fog.layers) if isinstance(l, Particles) and l.enabled}
-        n, heads, data, parts = pack(fog, states)
-        _set(prog, "uLayerCount", n)
-        prog["uLayerHead"].write(heads.tobytes()) if "uLayerHead" in prog else None
-        prog["uLayer"].write(data.tobytes()) if "uLayer" in prog else None
+        data, parts = pack(fog, states)
+        if "uLayer" in prog:   # constant indexing lets the compiler trim the array
+            u = prog["uLayer"]
+            u.write(data[:u.array_length].tobytes())
         self.particles.write(parts.tobytes())
         self.particles.use(TEX["uParticles"])
         self._noise_tex(fog).use(TEX["uNoise"])
@@ -249,27 +278,25 @@ class Renderer:
         # fog pass at 1/scale
         fog_fbo, fog_tex = self._fog_target(t, e.fog_scale)
         fog_fbo.use()
-        fp = self.fog_prog
+        fp = self.fog_program(still, e.fog_scale)
         self._set_fog_uniforms(fp, still, still.time)
         for name, v in (("uEye", view.eye), ("uFwd", view.fwd), ("uRight", view.right), ("uUp", view.up)):
             _set(fp, name, v)
-        _set(fp, "uScale", e.fog_scale)
         _set(fp, "uTime", still.time)
         _set(fp, "uSkyDistance", e.sky_distance)
         t.invdist.use(TEX["uInvDist"])
         self.empty_vao[fp].render(moderngl.TRIANGLES, vertices=3)
 
         # composite (with the blur fused, or followed by separate blur passes)
-        cp = self.composite_prog
         blur_mode = {"off": 0, "single": 1, "separate": 2}[e.blur]
+        cp = self.composite_program(e.fog_scale, blur_mode)
         sigma = e.blur_radius * h / 720.0
         sun_col = np.array(srgb_to_linear(still.sun.color)) * still.sun.intensity
         for name, v in (("uFwd", view.fwd), ("uRight", view.right), ("uUp", view.up),
                         ("uFogColor", np.array(srgb_to_linear(still.fog_color))),
                         ("uSunDir", still.sun.direction()), ("uScatterColor", sun_col * e.scatter)):
             _set(cp, name, v)
-        for name, v in (("uScale", e.fog_scale), ("uScatterExponent", e.scatter_exponent),
-                        ("uBlurMode", blur_mode), ("uBlurSigma", sigma),
+        for name, v in (("uScatterExponent", e.scatter_exponent), ("uBlurSigma", sigma),
                         ("uBlurExponent", e.blur_exponent)):
             _set(cp, name, v)
         t.color.use(TEX["uColor"])
@@ -321,7 +348,7 @@ class Renderer:
         fbo = self.ctx.framebuffer(color_attachments=[target])
         try:
             fbo.use()
-            rp = self.rays_prog
+            rp = self.rays_program(fog)
             self._set_fog_uniforms(rp, fog, time)
             _set(rp, "uRayCount", n)
             rays.use(TEX["uRays"])

@@ -39,8 +39,13 @@ class Source:
         return _MESSAGE.sub(repl, message)
 
 
-def load(name: str, defines: dict[str, object] | None = None, root: Path = SHADER_DIR) -> Source:
-    """Read shaders/<name>, expanding includes, with `#define`s placed after #version."""
+def load(name: str, defines: dict[str, object] | None = None, root: Path = SHADER_DIR,
+         generated: dict[str, str] | None = None) -> Source:
+    """Read shaders/<name>, expanding includes, with `#define`s placed after #version.
+
+    `generated` maps include names to text made by the server (e.g. the fog layer calls
+    for one layer configuration); they are looked up before files."""
+    generated = generated or {}
     src = Source("")
     out: list[str] = [GLSL_VERSION]
     for k, v in (defines or {}).items():
@@ -53,14 +58,18 @@ def load(name: str, defines: dict[str, object] | None = None, root: Path = SHADE
         if rel in seen:
             return
         seen.add(rel)
-        path = (root / rel).resolve()
-        if root.resolve() not in path.parents or not path.is_file():
-            where = f"{chain[-1]}: " if chain else ""
-            raise ShaderError(f"{where}cannot include {rel!r}: no such file under shaders/")
+        if rel in generated:
+            text = generated[rel]
+        else:
+            path = (root / rel).resolve()
+            if root.resolve() not in path.parents or not path.is_file():
+                where = f"{chain[-1]}: " if chain else ""
+                raise ShaderError(f"{where}cannot include {rel!r}: no such file under shaders/")
+            text = path.read_text()
         number = len(src.files)
         src.files.append(rel)
         out.append(f"#line 1 {number}")
-        for i, line in enumerate(path.read_text().splitlines(), start=1):
+        for i, line in enumerate(text.splitlines(), start=1):
             m = _INCLUDE.match(line)
             if m:
                 expand(m.group(1), chain + (rel,))
@@ -75,9 +84,10 @@ def load(name: str, defines: dict[str, object] | None = None, root: Path = SHADE
     return src
 
 
-def program(ctx, vertex: str, fragment: str, defines: dict[str, object] | None = None):
+def program(ctx, vertex: str, fragment: str, defines: dict[str, object] | None = None,
+            generated: dict[str, str] | None = None):
     """Compile and link a program; a failure raises ShaderError naming file and line."""
-    vs, fs = load(vertex, defines), load(fragment, defines)
+    vs, fs = load(vertex, defines, generated=generated), load(fragment, defines, generated=generated)
     try:
         return ctx.program(vertex_shader=vs.text, fragment_shader=fs.text)
     except Exception as exc:  # moderngl raises a plain Error with the driver's log

@@ -2,19 +2,19 @@
 // in-scattering (Gawron 3.2) and, optionally, the fog blur fused in (Gawron 3.4, single
 // pass: the scene under the fog is blurred with a Gaussian whose sigma follows 1 - T).
 // T comes from the fog target, upsampled with depth awareness when it is smaller.
+// Defined by the renderer: FOG_SCALE (1, 2, 4) and BLUR_MODE (0 off, 1 fused here,
+// 2 separate passes follow).
 #include "common/camera.glsl"
 #include "common/srgb.glsl"
 in vec2 vUV;
 uniform sampler2D uColor;         // scene colour, linear (bilinear filtering)
 uniform sampler2D uInvDist;       // full-resolution 1/distance
-uniform sampler2D uFog;           // (T, 1/distance) at 1/uScale size
-uniform int uScale;
+uniform sampler2D uFog;           // (T, 1/distance) at 1/FOG_SCALE size
 uniform vec3 uFwd, uRight, uUp;
 uniform vec3 uFogColor;           // linear
 uniform vec3 uSunDir;
 uniform vec3 uScatterColor;       // sun colour * intensity * scatter strength
 uniform float uScatterExponent;
-uniform int uBlurMode;            // 0 off, 1 fused here, 2 separate passes follow
 uniform float uBlurSigma;         // px at full fog
 uniform float uBlurExponent;
 layout(location = 0) out vec4 fColor;
@@ -25,9 +25,11 @@ const float K5[5] = float[5](0.054488685, 0.244201342, 0.402619947, 0.244201342,
 // Depth-aware upsample (Biri 4.3; "nearest-depth" joint bilateral): the four nearest fog
 // texels weighted bilinearly and by how close their surface is to this pixel's.
 float fogT(ivec2 px, float invd) {
-    if (uScale == 1) return texelFetch(uFog, px, 0).r;
+#if FOG_SCALE == 1
+    return texelFetch(uFog, px, 0).r;
+#else
     ivec2 size = textureSize(uFog, 0);
-    vec2 p = (vec2(px) + 0.5) / float(uScale) - 0.5;
+    vec2 p = (vec2(px) + 0.5) / float(FOG_SCALE) - 0.5;
     ivec2 i0 = ivec2(floor(p));
     vec2 f = p - vec2(i0);
     float acc = 0.0, wsum = 0.0, best = 1e9, bestT = 1.0;
@@ -45,6 +47,7 @@ float fogT(ivec2 px, float invd) {
     }
     // no neighbour on this surface (a thin object): take the closest in depth
     return wsum > 1e-4 ? acc / wsum : bestT;
+#endif
 }
 
 void main() {
@@ -55,7 +58,7 @@ void main() {
     vec3 w = viewRay(vUV * 2.0 - 1.0, uFwd, uRight, uUp);
     vec3 fog = uFogColor + uScatterColor * pow(max(dot(w, uSunDir), 0.0), uScatterExponent);
     vec3 scene = texelFetch(uColor, px, 0).rgb;
-    if (uBlurMode == 1) {
+    if (BLUR_MODE == 1) {
         float sigma = uBlurSigma * pow(1.0 - T, uBlurExponent);
         if (sigma > 0.05) {   // below 0.05 px the kernel is the identity to 8 bits
             vec3 acc = vec3(0.0);
@@ -66,6 +69,6 @@ void main() {
         }
     }
     vec3 c = T * scene + (1.0 - T) * fog;
-    if (uBlurMode == 2) fColor = vec4(c, 1.0 - T);     // linear, fog amount for the blur
+    if (BLUR_MODE == 2) fColor = vec4(c, 1.0 - T);     // linear, fog amount for the blur
     else fColor = vec4(linearToSrgb(c), 1.0);
 }
