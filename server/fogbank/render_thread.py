@@ -25,6 +25,7 @@ class RenderThread:
         self._ready = threading.Event()
         self._info: dict[str, str] = {}
         self._error: BaseException | None = None
+        self.generation = 0   # how many times the renderer was rebuilt
         self._thread = threading.Thread(target=self._run, name="fogbank-render", daemon=True)
         self._thread.start()
 
@@ -80,13 +81,22 @@ class RenderThread:
             except BaseException as exc:  # noqa: BLE001 - the job's own failure
                 if not fut.done():
                     fut.set_exception(exc)
-                if _is_gl_failure(exc):
+                if _is_gl_failure(exc) or not _healthy(renderer):
                     log.warning("renderer failed (%s); rebuilding it", exc)
                     try:
                         renderer.ctx.release()
                     except Exception:  # noqa: BLE001
                         pass
                     renderer = self._start()
+                    self.generation += 1
+
+
+def _healthy(renderer: Renderer) -> bool:
+    """Whether the renderer's context still answers (a released or lost one does not)."""
+    try:
+        return isinstance(renderer.ctx.error, str)
+    except Exception:  # noqa: BLE001
+        return False
 
 
 def _is_gl_failure(exc: BaseException) -> bool:
