@@ -74,10 +74,11 @@ class RenderThread:
             if not fut.set_running_or_notify_cancel():
                 continue
             try:
-                fut.set_result(fn(renderer))
+                result = fn(renderer)
                 err = renderer.ctx.error
                 if err != "GL_NO_ERROR":
                     raise RuntimeError(f"GL error after a job: {err}")
+                fut.set_result(result)
             except BaseException as exc:  # noqa: BLE001 - the job's own failure
                 if not fut.done():
                     fut.set_exception(exc)
