@@ -334,28 +334,37 @@ class Renderer:
                                   np.asarray(directions)[idx], np.asarray(lengths)[idx])
         return out
 
+    def _rays_targets(self, rows: int):
+        """Ray input texture and output target with room for `rows` rows (kept and reused;
+        grown by powers of two)."""
+        if self._rays_fbo is None or self._rays_fbo[0] < rows:
+            cap = 1 << max(0, (rows - 1).bit_length())
+            if self._rays_fbo is not None:
+                for obj in self._rays_fbo[1:]:
+                    obj.release()
+            rays = self.ctx.texture((RAYS_PER_ROW, 2 * cap), 4, dtype="f4")
+            rays.filter = (moderngl.NEAREST, moderngl.NEAREST)
+            target = self.ctx.texture((RAYS_PER_ROW, cap), 1, dtype="f4")
+            fbo = self.ctx.framebuffer(color_attachments=[target])
+            self._rays_fbo = (cap, rays, target, fbo)
+        return self._rays_fbo
+
     def _rays(self, fog, time, O, W, D) -> np.ndarray:
         n = len(D)
         rows = -(-n // RAYS_PER_ROW)
-        data = np.zeros((2 * rows, RAYS_PER_ROW, 4), np.float32)
-        flat = data.reshape(rows, 2, RAYS_PER_ROW, 4)
+        _, rays, _, fbo = self._rays_targets(rows)
+        data = np.zeros((rows, 2, RAYS_PER_ROW, 4), np.float32)
         r, c = np.divmod(np.arange(n), RAYS_PER_ROW)
-        flat[r, 0, c, :3], flat[r, 0, c, 3] = O, D
-        flat[r, 1, c, :3], flat[r, 1, c, 3] = W, time
-        rays = self.ctx.texture((RAYS_PER_ROW, 2 * rows), 4, data.tobytes(), dtype="f4")
-        rays.filter = (moderngl.NEAREST, moderngl.NEAREST)
-        target = self.ctx.texture((RAYS_PER_ROW, rows), 1, dtype="f4")
-        fbo = self.ctx.framebuffer(color_attachments=[target])
-        try:
-            fbo.use()
-            rp = self.rays_program(fog)
-            self._set_fog_uniforms(rp, fog, time)
-            _set(rp, "uRayCount", n)
-            rays.use(TEX["uRays"])
-            self.empty_vao[rp].render(moderngl.TRIANGLES, vertices=3)
-            res = np.frombuffer(fbo.read(components=1, dtype="f4", alignment=1), np.float32)
-            return res[:n].copy()
-        finally:
-            fbo.release()
-            target.release()
-            rays.release()
+        data[r, 0, c, :3], data[r, 0, c, 3] = O, D
+        data[r, 1, c, :3], data[r, 1, c, 3] = W, time
+        rays.write(data.tobytes(), viewport=(0, 0, RAYS_PER_ROW, 2 * rows))
+        fbo.use()
+        fbo.viewport = (0, 0, RAYS_PER_ROW, rows)
+        rp = self.rays_program(fog)
+        self._set_fog_uniforms(rp, fog, time)
+        _set(rp, "uRayCount", n)
+        rays.use(TEX["uRays"])
+        self.empty_vao[rp].render(moderngl.TRIANGLES, vertices=3)
+        res = np.frombuffer(fbo.read(viewport=(0, 0, RAYS_PER_ROW, rows), components=1, dtype="f4",
+                                     alignment=1), np.float32)
+        return res[:n].copy()
