@@ -145,3 +145,25 @@ def test_blur_softens_edges_only_where_there_is_fog(renderer, mode):
     clear = base.model_copy(update={"layers": []})
     assert np.array_equal(renderer.render(clear),
                           renderer.render(clear.model_copy(update={"effects": eff})))
+
+
+def test_any_valid_look_renders(renderer):
+    """Random valid looks (all kinds, extreme sizes and effects) render without a GL error
+    and give finite pixels."""
+    from draws import ALL, random_layer
+    rng = np.random.default_rng(42)
+    for i in range(64):   # more layer variants than the program cache keeps (48)
+        layers = [random_layer(str(rng.choice(ALL)), rng) for _ in range(int(rng.integers(0, 6)))]
+        still = StillParams(
+            width=int(rng.choice([1, 2, 3, 17, 64, 129])), height=int(rng.choice([1, 5, 33, 64])),
+            scene=str(rng.choice(["countryside", "calibration"])), layers=layers,
+            time=float(rng.uniform(0, 1000)), density=float(rng.uniform(0, 20)),
+            camera={"position": tuple(rng.uniform(-300, 300, 3)), "yaw": float(rng.uniform(-360, 360)),
+                    "pitch": float(rng.uniform(-89, 89)), "fov": float(rng.uniform(10, 120))},
+            effects={"fog_scale": int(rng.choice([1, 2, 4])),
+                     "blur": str(rng.choice(["off", "single", "separate"])),
+                     "blur_radius": float(rng.uniform(0, 16)), "start_distance": float(rng.uniform(0, 50)),
+                     "max_opacity": float(rng.uniform(0, 1))})
+        img = renderer.render(still)
+        assert img.shape == (still.height, still.width, 3)
+        assert renderer.ctx.error == "GL_NO_ERROR"

@@ -103,8 +103,10 @@ class Renderer:
         if vert == "passes/fullscreen.vert":
             self.empty_vao[prog] = self.ctx.vertex_array(prog, [])
         self._programs[key] = prog
-        while len(self._programs) > 48:   # fog variants come and go; keep the recent ones
-            _, old = self._programs.popitem(last=False)
+        # fog layer variants come and go: keep the 48 most recent (the fixed programs stay)
+        variants = [k for k in self._programs if k[2] is not None]
+        for k in variants[:max(0, len(variants) - 48)]:
+            old = self._programs.pop(k)
             vao = self.empty_vao.pop(old, None)
             if vao is not None:
                 vao.release()
