@@ -12,7 +12,7 @@ from contextlib import asynccontextmanager
 from typing import Any, Literal
 
 import numpy as np
-from fastapi import Body, FastAPI, Request
+from fastapi import Body, FastAPI, Request, WebSocket
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import FileResponse, JSONResponse, Response
 from fastapi.staticfiles import StaticFiles
@@ -24,6 +24,7 @@ from .encode import MEDIA_TYPES, encode
 from .params import FogParams, StillParams, Strict, Vec3
 from .render_thread import RenderThread
 from .settings import Settings, get_settings
+from .streaming import Streamer, websocket_endpoint
 from .urlstate import URLError, decode
 from .urlstate import encode as encode_url
 
@@ -92,7 +93,10 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         state["render"] = rt
         state["pool"] = ThreadPoolExecutor(settings.encode_threads, thread_name_prefix="encode")
         state["cache"] = OrderedDict()
+        state["streamer"] = Streamer(rt, state["pool"])
+        state["streamer"].start()
         yield
+        await state["streamer"].stop()
         rt.stop()
         state["pool"].shutdown(wait=False)
 
@@ -191,6 +195,10 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         info = rt.info if rt else {}
         return {"status": "ok", "renderer": info.get("renderer"), "gl_version": info.get("version"),
                 "queue": rt.depth() if rt else 0}
+
+    @app.websocket("/ws")
+    async def ws(websocket: WebSocket):
+        await websocket_endpoint(websocket, state["streamer"], state["render"].info)
 
     @app.get("/", include_in_schema=False)
     async def index():

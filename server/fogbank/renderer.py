@@ -27,6 +27,7 @@ from .shaders import program
 MSAA_SAMPLES = 4
 SHADOW_SIZE = 2048
 RAYS_PER_ROW = 1024
+MAX_GBUFFERS = 16   # cached scene passes (sessions x sizes)
 TEX = {"uColor": 0, "uInvDist": 1, "uFog": 2, "uParticles": 3, "uNoise": 4, "uShadow": 5,
        "uRays": 6, "uImage": 0}
 
@@ -54,16 +55,33 @@ def _set(prog, name: str, value) -> None:
 
 @dataclass
 class Targets:
-    """Render targets for one frame size."""
+    """Scratch render targets for one frame size, shared by every caller (one frame is
+    drawn at a time on the render thread)."""
     size: tuple[int, int]
-    msaa: moderngl.Framebuffer
-    gbuf: moderngl.Framebuffer
-    color: moderngl.Texture
-    invdist: moderngl.Texture
     out: moderngl.Framebuffer
+    msaa: moderngl.Framebuffer | None = None
     fog: dict[int, tuple[moderngl.Framebuffer, moderngl.Texture]] = field(default_factory=dict)
     linear: list[tuple[moderngl.Framebuffer, moderngl.Texture]] = field(default_factory=list)
+
+    def release(self) -> None:
+        for obj in [self.out, self.msaa] + [f for f, _ in self.fog.values()] + [f for f, _ in self.linear]:
+            if obj is not None:
+                obj.release()
+
+
+@dataclass
+class GBuffer:
+    """A cached scene pass (colour and inverse distance) for one slot (a streaming session,
+    or stills) and size; redrawn only when scene, camera, sun or MSAA change."""
+    fbo: moderngl.Framebuffer      # colour + inverse distance + single-sample depth
+    color: moderngl.Texture
+    invdist: moderngl.Texture
     scene_key: object = None
+
+    def release(self) -> None:
+        self.fbo.release()
+        self.color.release()
+        self.invdist.release()
 
 
 class Renderer:
@@ -83,7 +101,8 @@ class Renderer:
         self.shadow_fbo = ctx.framebuffer(depth_attachment=self.shadow_tex)
         self.shadow_key: object = None
         self._meshes: dict[str, tuple] = {}
-        self._targets: dict[tuple[int, int], Targets] = {}
+        self._targets: OrderedDict = OrderedDict()    # (w, h) -> Targets
+        self._gbuffers: OrderedDict = OrderedDict()   # (slot, w, h) -> GBuffer
         self._noise: dict[tuple, moderngl.Texture] = {}
         self._rays_fbo: tuple | None = None
 
@@ -163,24 +182,45 @@ class Renderer:
         return self._noise[key]
 
     def _targets_for(self, w: int, h: int) -> Targets:
-        if (w, h) not in self._targets:
-            ctx = self.ctx
+        if (w, h) in self._targets:
+            self._targets.move_to_end((w, h))
+        else:
             if len(self._targets) >= 4:  # keep a few sizes; drop the oldest
-                old = self._targets.pop(next(iter(self._targets)))
-                for obj in (old.msaa, old.gbuf, old.out):
-                    obj.release()
-            msaa = ctx.framebuffer(
-                color_attachments=[ctx.renderbuffer((w, h), 4, samples=MSAA_SAMPLES, dtype="f2"),
-                                   ctx.renderbuffer((w, h), 1, samples=MSAA_SAMPLES, dtype="f4")],
-                depth_attachment=ctx.depth_renderbuffer((w, h), samples=MSAA_SAMPLES))
-            color = ctx.texture((w, h), 4, dtype="f2")
-            color.repeat_x = color.repeat_y = False
-            invdist = ctx.texture((w, h), 1, dtype="f4")
-            invdist.filter = (moderngl.NEAREST, moderngl.NEAREST)
-            gbuf = ctx.framebuffer(color_attachments=[color, invdist])
-            out = ctx.framebuffer(color_attachments=[ctx.renderbuffer((w, h), 4)])
-            self._targets[(w, h)] = Targets((w, h), msaa, gbuf, color, invdist, out)
+                self._targets.popitem(last=False)[1].release()
+            out = self.ctx.framebuffer(color_attachments=[self.ctx.renderbuffer((w, h), 4)])
+            self._targets[(w, h)] = Targets((w, h), out)
         return self._targets[(w, h)]
+
+    def _msaa_fbo(self, t: Targets) -> moderngl.Framebuffer:
+        if t.msaa is None:
+            ctx, size = self.ctx, t.size
+            t.msaa = ctx.framebuffer(
+                color_attachments=[ctx.renderbuffer(size, 4, samples=MSAA_SAMPLES, dtype="f2"),
+                                   ctx.renderbuffer(size, 1, samples=MSAA_SAMPLES, dtype="f4")],
+                depth_attachment=ctx.depth_renderbuffer(size, samples=MSAA_SAMPLES))
+        return t.msaa
+
+    def _gbuffer(self, slot: str, w: int, h: int) -> GBuffer:
+        key = (slot, w, h)
+        if key in self._gbuffers:
+            self._gbuffers.move_to_end(key)
+            return self._gbuffers[key]
+        while len(self._gbuffers) >= MAX_GBUFFERS:
+            self._gbuffers.popitem(last=False)[1].release()
+        ctx = self.ctx
+        color = ctx.texture((w, h), 4, dtype="f2")
+        color.repeat_x = color.repeat_y = False
+        invdist = ctx.texture((w, h), 1, dtype="f4")
+        invdist.filter = (moderngl.NEAREST, moderngl.NEAREST)
+        fbo = ctx.framebuffer(color_attachments=[color, invdist],
+                              depth_attachment=ctx.depth_renderbuffer((w, h)))
+        self._gbuffers[key] = GBuffer(fbo, color, invdist)
+        return self._gbuffers[key]
+
+    def drop_slot(self, slot: str) -> None:
+        """Free a slot's cached scene passes (a session ended)."""
+        for key in [k for k in self._gbuffers if k[0] == slot]:
+            self._gbuffers.pop(key).release()
 
     def _fog_target(self, t: Targets, scale: int):
         if scale not in t.fog:
@@ -215,17 +255,18 @@ class Renderer:
             self.shadow_key = key
         return sun_vp
 
-    def _scene_pass(self, fog: FogParams, t: Targets, view: cam.View) -> None:
-        key = (fog.scene, fog.camera, fog.sun)
-        if t.scene_key == key:
+    def _scene_pass(self, fog: FogParams, t: Targets, g: GBuffer, view: cam.View, msaa: bool) -> None:
+        key = (fog.scene, fog.camera, fog.sun, msaa)
+        if g.scene_key == key:
             return
         ctx = self.ctx
         vaos, bounds = self._mesh(fog.scene)
         sun_vp = self._shadow_pass(fog, vaos, bounds)
         sun_dir = fog.sun.direction()
         sun_col = np.array(srgb_to_linear(fog.sun.color)) * fog.sun.intensity
-        t.msaa.use()
-        t.msaa.clear(0.0, 0.0, 0.0, 1.0, depth=1.0)
+        target = self._msaa_fbo(t) if msaa else g.fbo
+        target.use()
+        target.clear(0.0, 0.0, 0.0, 1.0, depth=1.0)
         ctx.disable(moderngl.DEPTH_TEST)
         sp = self.sky_prog
         for name, v in (("uFwd", view.fwd), ("uRight", view.right), ("uUp", view.up),
@@ -247,8 +288,9 @@ class Renderer:
         for scene_vao, _ in vaos:
             scene_vao.render(moderngl.TRIANGLES)
         ctx.disable(moderngl.DEPTH_TEST)
-        ctx.copy_framebuffer(t.gbuf, t.msaa)  # MSAA resolve of both attachments
-        t.scene_key = key
+        if msaa:
+            ctx.copy_framebuffer(g.fbo, target)  # MSAA resolve of both colour attachments
+        g.scene_key = key
 
     def _set_fog_uniforms(self, prog, fog: FogParams, time: float) -> None:
         ground = terrain.flat if fog.scene == "calibration" else terrain.height
@@ -268,13 +310,15 @@ class Renderer:
         _set(prog, "uMaxOpacity", e.max_opacity)
         _set(prog, "uDensityPow", fog.density)
 
-    def render(self, still: StillParams) -> np.ndarray:
-        """The frame as (height, width, 3) uint8 sRGB, top row first."""
-        ctx = self.ctx
+    def render(self, still: StillParams, slot: str = "still", msaa: bool = True) -> np.ndarray:
+        """The frame as (height, width, 3) uint8 sRGB, top row first. `slot` names whose
+        scene pass is cached (a session id; stills share one); `msaa` off is the cheap
+        preview used while a user drags."""
         w, h = still.width, still.height
         t = self._targets_for(w, h)
+        g = self._gbuffer(slot, w, h)
         view = cam.view(still.camera, w, h)
-        self._scene_pass(still, t, view)
+        self._scene_pass(still, t, g, view, msaa)
         e = still.effects
 
         # fog pass at 1/scale
@@ -286,7 +330,7 @@ class Renderer:
             _set(fp, name, v)
         _set(fp, "uTime", still.time)
         _set(fp, "uSkyDistance", e.sky_distance)
-        t.invdist.use(TEX["uInvDist"])
+        g.invdist.use(TEX["uInvDist"])
         self.empty_vao[fp].render(moderngl.TRIANGLES, vertices=3)
 
         # composite (with the blur fused, or followed by separate blur passes)
@@ -301,8 +345,8 @@ class Renderer:
         for name, v in (("uScatterExponent", e.scatter_exponent), ("uBlurSigma", sigma),
                         ("uBlurExponent", e.blur_exponent)):
             _set(cp, name, v)
-        t.color.use(TEX["uColor"])
-        t.invdist.use(TEX["uInvDist"])
+        g.color.use(TEX["uColor"])
+        g.invdist.use(TEX["uInvDist"])
         fog_tex.use(TEX["uFog"])
         if blur_mode == 2:
             (fa, ta), (fb, tb) = self._linear_targets(t)

@@ -1,0 +1,135 @@
+"""The WebSocket protocol: client messages (JSON text) and the binary frame header.
+
+Client -> server, one JSON object per text message, told apart by "type":
+
+    {"type": "query", "query": "v=1&camera.yaw=12"}        set the look from a URL query
+    {"type": "params", "params": {...}, "replace": false}  patch (or replace) the look
+    {"type": "camera", "camera": {"yaw": 10}}              patch the camera
+    {"type": "play", "playing": true}                      run or stop the clock
+    {"type": "speed", "speed": 2.0}                        time speed (sim s per wall s)
+    {"type": "seek", "time": 12.5}                         set the sim time
+    {"type": "view", "width": 640, "height": 360, "fps": 30, "quality": 80}
+    {"type": "interact", "active": true}                   a drag started/ended
+    {"type": "ack", "frame": 17}                           frames up to 17 arrived
+
+Server -> client: text {"type": "hello" | "state" | "error", ...} and binary frames:
+HEADER (little-endian, 36 bytes) followed by the JPEG.
+"""
+
+from __future__ import annotations
+
+import json
+import struct
+from typing import Annotated, Any, Literal, Union
+
+from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError
+
+PROTOCOL = 1
+MAX_MESSAGE = 64 * 1024
+# magic, frame id, params version, sim time (s), render ms, encode ms, width, height,
+# jpeg quality, flags (bit 0: full quality, bit 1: playing), fog scale, reserved
+HEADER = struct.Struct("<4sIIdffHHBBBB")
+MAGIC = b"FBK1"
+FLAG_FULL = 1
+FLAG_PLAYING = 2
+
+
+class _Msg(BaseModel):
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+
+
+class QueryMsg(_Msg):
+    type: Literal["query"]
+    query: str = Field(max_length=16384)
+
+
+class ParamsMsg(_Msg):
+    type: Literal["params"]
+    params: dict[str, Any]
+    replace: bool = False
+
+
+class CameraMsg(_Msg):
+    type: Literal["camera"]
+    camera: dict[str, Any]
+
+
+class PlayMsg(_Msg):
+    type: Literal["play"]
+    playing: bool
+
+
+class SpeedMsg(_Msg):
+    type: Literal["speed"]
+    speed: float = Field(ge=-100, le=100)
+
+
+class SeekMsg(_Msg):
+    type: Literal["seek"]
+    time: float = Field(ge=0, le=1e6)
+
+
+class ViewMsg(_Msg):
+    type: Literal["view"]
+    width: int = Field(640, ge=16, le=1920)
+    height: int = Field(360, ge=16, le=1080)
+    fps: int = Field(30, ge=1, le=60)
+    quality: int = Field(80, ge=10, le=95)
+
+
+class InteractMsg(_Msg):
+    type: Literal["interact"]
+    active: bool
+
+
+class AckMsg(_Msg):
+    type: Literal["ack"]
+    frame: int = Field(ge=0, le=2**32 - 1)
+
+
+Message = Annotated[Union[QueryMsg, ParamsMsg, CameraMsg, PlayMsg, SpeedMsg, SeekMsg, ViewMsg,
+                          InteractMsg, AckMsg], Field(discriminator="type")]
+_adapter: TypeAdapter = TypeAdapter(Message)
+TYPES = ["query", "params", "camera", "play", "speed", "seek", "view", "interact", "ack"]
+
+
+class ProtocolError(ValueError):
+    """A message the server cannot take; `errors` are {loc, msg, type} dicts."""
+
+    def __init__(self, errors: list[dict[str, Any]]):
+        super().__init__(errors[0]["msg"] if errors else "bad message")
+        self.errors = errors
+
+
+def parse(text: str | bytes) -> BaseModel:
+    """One client message, or ProtocolError naming what is wrong with it."""
+    if isinstance(text, bytes):
+        try:
+            text = text.decode("utf-8")
+        except UnicodeDecodeError:
+            raise ProtocolError([{"loc": ["message"], "msg": "messages are UTF-8 JSON text",
+                                  "type": "message_encoding"}]) from None
+    try:
+        data = json.loads(text)
+    except (json.JSONDecodeError, RecursionError) as exc:
+        raise ProtocolError([{"loc": ["message"], "msg": f"malformed JSON: {exc}",
+                              "type": "json_invalid"}]) from None
+    if not isinstance(data, dict):
+        raise ProtocolError([{"loc": ["message"], "msg": "a message is a JSON object",
+                              "type": "message_type"}])
+    kind = data.get("type")
+    if kind not in TYPES:
+        raise ProtocolError([{"loc": ["message", "type"],
+                              "msg": f"unknown message type {kind!r}; one of {', '.join(TYPES)}",
+                              "type": "message_type"}])
+    try:
+        return _adapter.validate_python(data)
+    except ValidationError as exc:
+        raise ProtocolError([{"loc": ["message", *e["loc"][1:]], "msg": e["msg"], "type": e["type"]}
+                             for e in exc.errors(include_url=False)]) from None
+
+
+def frame_header(frame: int, version: int, sim_time: float, render_ms: float, encode_ms: float,
+                 width: int, height: int, quality: int, flags: int, fog_scale: int) -> bytes:
+    return HEADER.pack(MAGIC, frame, version, sim_time, render_ms, encode_ms, width, height,
+                       quality, flags, fog_scale, 0)
