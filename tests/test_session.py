@@ -1,0 +1,89 @@
+"""A session's scheduling logic with a hand-driven clock: fps cap, acks, latest wins,
+preview while dragging and the refinement after, play/pause and seek."""
+
+from __future__ import annotations
+
+from fogbank.protocol import parse
+from fogbank.session import INPUT_SETTLE_S, MAX_IN_FLIGHT, Session
+
+
+def msg(text):
+    return parse(text)
+
+
+def test_fps_cap_and_in_flight_bound():
+    s = Session("a", now=0.0)
+    s.apply(msg('{"type": "view", "width": 64, "height": 64, "fps": 10}'), 0.0)
+    assert s.next_due(0.0) == 0.0
+    j1 = s.start_frame(0.0)
+    assert s.next_due(0.01) == 0.1          # 10 fps
+    j2 = s.start_frame(0.1)
+    assert s.next_due(0.2) is None           # two in flight
+    s.frame_done(j1, sent=True)
+    s.frame_done(j2, sent=True)
+    assert s.in_flight() == MAX_IN_FLIGHT    # sent, not acknowledged
+    assert s.next_due(0.3) is None
+    s.apply(msg('{"type": "ack", "frame": 1}'), 0.3)
+    assert s.next_due(0.3) == 0.3
+
+
+def test_latest_wins():
+    s = Session("a", now=0.0)
+    s.apply(msg('{"type": "play", "playing": false}'), 0.0)
+    for d in (1.5, 2.0, 2.5):
+        s.apply(msg('{"type": "params", "params": {"density": %s}}' % d), 0.0)
+    job = s.start_frame(1.0)
+    assert job.still.density == 2.5
+    assert job.version == s.version
+
+
+def test_preview_then_refinement():
+    s = Session("a", now=0.0)
+    s.apply(msg('{"type": "play", "playing": false}'), 0.0)
+    s.apply(msg('{"type": "view", "width": 640, "height": 360, "fps": 30, "quality": 85}'), 0.0)
+    s.start_frame(0.0)
+    s.apply(msg('{"type": "camera", "camera": {"yaw": 10}}'), 1.0)
+    job = s.start_frame(1.0)
+    assert not job.full and not job.msaa and job.quality == 60
+    assert job.still.effects.fog_scale == 2
+    s.frame_done(job, sent=True)
+    s.apply(msg(f'{{"type": "ack", "frame": {job.frame}}}'), 1.05)
+    assert s.next_due(1.05) == 1.0 + INPUT_SETTLE_S    # the refinement, once input settles
+    t = 1.0 + INPUT_SETTLE_S
+    refine = s.start_frame(t)
+    assert refine.full and refine.msaa and refine.quality == 85
+    assert refine.still.camera.yaw == 10
+    s.frame_done(refine, sent=True)
+    s.apply(msg(f'{{"type": "ack", "frame": {refine.frame}}}'), t)
+    assert s.next_due(t + 1) is None                    # paused, nothing new: no frames
+
+
+def test_clock_play_pause_seek_speed():
+    s = Session("a", now=100.0)
+    assert s.sim_time(102.0) == 2.0
+    s.apply(msg('{"type": "speed", "speed": 2}'), 102.0)
+    assert s.sim_time(103.0) == 4.0
+    s.apply(msg('{"type": "play", "playing": false}'), 103.0)
+    assert s.sim_time(200.0) == 4.0
+    assert s.fog.time == 4.0                             # the URL keeps the paused time
+    s.apply(msg('{"type": "seek", "time": 30}'), 200.0)
+    assert s.sim_time(300.0) == 30.0
+    s.apply(msg('{"type": "play", "playing": true}'), 300.0)
+    assert s.sim_time(301.0) == 32.0
+
+
+def test_bad_params_keep_the_last_valid_look():
+    s = Session("a", now=0.0)
+    before, v = s.fog, s.version
+    out = s.apply(msg('{"type": "params", "params": {"layers": [{"kind": "sphere", "radius": -1}]}}'), 0.0)
+    assert out[0]["type"] == "error"
+    assert out[0]["detail"][0]["loc"][:3] == ["params", "layers", 0]
+    assert s.fog == before and s.version == v
+    out = s.apply(msg('{"type": "query", "query": "camera.yaw=abc"}'), 0.0)
+    assert out[0]["type"] == "error" and s.fog == before
+
+
+def test_query_sets_the_look():
+    s = Session("a", now=0.0, query="v=1&camera.yaw=33&time=7")
+    assert s.fog.camera.yaw == 33
+    assert s.sim_time(0.0) == 7.0

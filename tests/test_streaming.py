@@ -1,0 +1,173 @@
+"""The /ws protocol end to end (Starlette's test client, real renderer): frames arrive,
+patches apply in order, acks bound frames in flight, latest wins under a slow reader,
+errors keep the session, oversized messages close it with 1009."""
+
+from __future__ import annotations
+
+import io
+import time
+
+import numpy as np
+from PIL import Image
+
+from fogbank.protocol import HEADER
+
+VIEW = {"type": "view", "width": 96, "height": 64, "fps": 60, "quality": 80}
+
+
+def frames_and_texts(ws, n_frames, ack=True, timeout=20.0):
+    frames, texts = [], []
+    t0 = time.monotonic()
+    while len(frames) < n_frames and time.monotonic() - t0 < timeout:
+        m = ws.receive()
+        if m.get("bytes"):
+            h = HEADER.unpack(m["bytes"][:HEADER.size])
+            frames.append((h, m["bytes"][HEADER.size:]))
+            if ack:
+                ws.send_json({"type": "ack", "frame": h[1]})
+        elif m.get("text"):
+            import json
+            texts.append(json.loads(m["text"]))
+    return frames, texts
+
+
+def open_ws(client, query=""):
+    ws = client.websocket_connect("/ws" + (f"?{query}" if query else ""))
+    return ws
+
+
+def test_frames_arrive_with_header_and_jpeg(client):
+    with open_ws(client, "camera.yaw=12") as ws:
+        hello = ws.receive_json()
+        assert hello["type"] == "hello" and hello["renderer"]
+        state = ws.receive_json()
+        assert state["type"] == "state" and state["query"] == "v=1&camera.yaw=12"
+        ws.send_json(VIEW)
+        frames, _ = frames_and_texts(ws, 4)
+        assert len(frames) == 4
+        h, jpeg = frames[-1]
+        assert h[0] == b"FBK1" and (h[6], h[7]) == (96, 64)
+        assert np.asarray(Image.open(io.BytesIO(jpeg))).shape == (64, 96, 3)
+        ids = [f[0][1] for f in frames]
+        assert ids == sorted(ids)
+        times = [f[0][3] for f in frames]
+        assert times[-1] > times[0]            # playing: time runs
+
+
+def test_patches_apply_in_order(client):
+    with open_ws(client) as ws:
+        ws.receive_json(), ws.receive_json()
+        ws.send_json(VIEW)
+        for d in (1.5, 2.0, 3.0):
+            ws.send_json({"type": "params", "params": {"density": d}})
+        versions = []
+        while len(versions) < 3:
+            m = ws.receive()
+            if m.get("text"):
+                import json
+                s = json.loads(m["text"])
+                versions.append((s["version"], s["params"]["density"]))
+            elif m.get("bytes"):
+                ws.send_json({"type": "ack", "frame": HEADER.unpack(m["bytes"][:36])[1]})
+        assert [d for _, d in versions] == [1.5, 2.0, 3.0]
+        assert [v for v, _ in versions] == sorted(v for v, _ in versions)
+        frames, _ = frames_and_texts(ws, 3)
+        assert frames[-1][0][2] == versions[-1][0]   # frames reflect the last version
+
+
+def read_until_speed(ws, speed):
+    """Read until the state that answers a speed message arrives (a sentinel: the test
+    client has no receive timeout). Returns frame headers and states read meanwhile."""
+    import json
+    frames, states = [], []
+    while True:
+        m = ws.receive()
+        if m.get("bytes"):
+            frames.append(HEADER.unpack(m["bytes"][:36]))
+            continue
+        t = json.loads(m["text"])
+        if t["type"] == "state":
+            states.append(t)
+            if t["speed"] == speed:
+                return frames, states
+
+
+def test_acks_bound_frames_in_flight_and_latest_wins(client):
+    with open_ws(client) as ws:
+        ws.receive_json(), ws.receive_json()
+        ws.send_json(VIEW)
+        ws.send_json({"type": "play", "playing": False})
+        # a slow reader: it never acknowledges, while the look keeps changing
+        for d in np.linspace(1.0, 4.0, 12):
+            ws.send_json({"type": "params", "params": {"density": float(d)}})
+            time.sleep(0.03)
+        time.sleep(1.0)
+        ws.send_json({"type": "speed", "speed": 1.5})
+        got, states = read_until_speed(ws, 1.5)
+        assert 1 <= len(got) <= 2                     # never more than two unacknowledged
+        final = max(s["version"] for s in states)
+        assert states[-2]["params"]["density"] == 4.0
+        for h in got:
+            ws.send_json({"type": "ack", "frame": h[1]})
+        frames, _ = frames_and_texts(ws, 1)
+        assert frames[0][0][2] == final               # the next frame shows the latest look
+
+
+def test_errors_keep_the_session(client):
+    import json
+    with open_ws(client) as ws:
+        ws.receive_json(), ws.receive_json()
+        ws.send_json(VIEW)
+        ws.send_text("{nope")
+        ws.send_json({"type": "teleport"})
+        ws.send_json({"type": "params", "params": {"layers": [{"kind": "cosine", "c0": 0.1}]}})
+        ws.send_text('{"type": "params", "params": {"density": NaN}}')
+        ws.send_bytes(b"\x00\x01binary junk")
+        errors = []
+        t0 = time.monotonic()
+        while len(errors) < 5 and time.monotonic() - t0 < 20:
+            m = ws.receive()
+            if m.get("text"):
+                t = json.loads(m["text"])
+                if t["type"] == "error":
+                    errors.append(t)
+            elif m.get("bytes"):
+                ws.send_json({"type": "ack", "frame": HEADER.unpack(m["bytes"][:36])[1]})
+        msgs = [e["msg"] for e in errors]
+        assert "malformed JSON" in msgs[0]
+        assert "teleport" in msgs[1]
+        assert errors[2]["detail"][0]["loc"][:2] == ["params", "layers"]
+        assert errors[3]["detail"][0]["loc"][0] == "params"
+        # still alive, with its last valid look
+        ws.send_json({"type": "params", "params": {"density": 2.5}})
+        ws.send_json({"type": "speed", "speed": 0.5})
+        got, states = read_until_speed(ws, 0.5)
+        for h in got:
+            ws.send_json({"type": "ack", "frame": h[1]})
+        assert states[-1]["params"]["density"] == 2.5
+        frames, _ = frames_and_texts(ws, 2)
+        assert len(frames) == 2
+        assert frames[-1][0][2] == states[-1]["version"]
+
+
+def test_oversized_message_closes_with_1009(client):
+    with open_ws(client) as ws:
+        ws.receive_json(), ws.receive_json()
+        ws.send_text('{"type": "params", "params": {"x": "' + "a" * 70000 + '"}}')
+        code = None
+        for _ in range(50):
+            m = ws.receive()
+            if m["type"] == "websocket.close":
+                code = m["code"]
+                break
+        assert code == 1009
+
+
+def test_two_sessions_are_served_round_robin(client):
+    with open_ws(client) as a, open_ws(client) as b:
+        for ws in (a, b):
+            ws.receive_json(), ws.receive_json()
+            ws.send_json(VIEW)
+        fa, _ = frames_and_texts(a, 3)
+        fb, _ = frames_and_texts(b, 3)
+        assert len(fa) == 3 and len(fb) == 3
