@@ -87,7 +87,8 @@ stream.addEventListener("state", (e) => {
   $("play").textContent = playing ? "Pause" : "Play";
   $("play").setAttribute("aria-pressed", String(playing));
   $("speed").value = String(s.speed);
-  const match = presets.find((p) => p.query === s.query);
+  const look = s.query.replace(/&(play|speed)=[^&]*/g, "");
+  const match = presets.find((p) => p.query === look);
   $("preset").value = match ? match.name : "";
   if (redrawNext) { controls.render(params); redrawNext = false; }
 });
@@ -107,6 +108,7 @@ stream.addEventListener("frame", (e) => {
   canvas.dataset.frame = String(e.detail.frame);
   canvas.dataset.version = String(e.detail.version);
   canvas.dataset.full = String(e.detail.full);
+  canvas.dataset.frames = String(Number(canvas.dataset.frames || 0) + 1);
 });
 stream.addEventListener("reconnecting", () => banner("Connection lost — reconnecting…"));
 stream.addEventListener("close", (e) => {

@@ -87,3 +87,11 @@ def test_query_sets_the_look():
     s = Session("a", now=0.0, query="v=1&camera.yaw=33&time=7")
     assert s.fog.camera.yaw == 33
     assert s.sim_time(0.0) == 7.0
+
+
+def test_paused_state_is_in_the_page_url():
+    s = Session("a", now=0.0, query="v=1&time=7&play=0")
+    assert not s.playing and s.sim_time(50.0) == 7.0
+    assert s.state(0.0)["query"] == "v=1&time=7&play=0"
+    s.apply(msg('{"type": "play", "playing": true}'), 1.0)
+    assert s.state(1.0)["query"] == "v=1&time=7"

@@ -145,8 +145,8 @@ def test_errors_keep_the_session(client):
         for h in got:
             ws.send_json({"type": "ack", "frame": h[1]})
         assert states[-1]["params"]["density"] == 2.5
-        frames, _ = frames_and_texts(ws, 2)
-        assert len(frames) == 2
+        frames, _ = frames_and_texts(ws, 4)      # up to two older frames may still arrive
+        assert len(frames) == 4
         assert frames[-1][0][2] == states[-1]["version"]
 
 

@@ -86,3 +86,12 @@ def test_presets_round_trip_from_their_own_base():
         p = FogParams.model_validate(P.preset_dict(name))
         assert encode(p, name) == f"v=1&preset={name}" if name != "default" else encode(p) == "v=1"
         assert FogParams.model_validate(decode(encode(p))[0]) == p
+
+
+def test_page_keys_are_not_part_of_the_look():
+    from fogbank.urlstate import view_state, view_suffix
+    value, _ = decode("camera.yaw=9&play=0&speed=2", StillParams)
+    assert value["camera"]["yaw"] == 9.0
+    assert view_state("camera.yaw=9&play=0&speed=2") == {"playing": False, "speed": 2.0}
+    assert view_state("play=maybe&speed=fast") == {}
+    assert view_suffix(True, 1.0) == "" and view_suffix(False, 0.5) == "&play=0&speed=0.5"

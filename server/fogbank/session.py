@@ -18,7 +18,7 @@ from . import presets as P
 from .params import FogParams, StillParams
 from .protocol import (AckMsg, CameraMsg, InteractMsg, ParamsMsg, PlayMsg, QueryMsg, SeekMsg,
                        SpeedMsg, ViewMsg)
-from .urlstate import URLError, decode, encode
+from .urlstate import URLError, decode, encode, view_state, view_suffix
 
 MAX_IN_FLIGHT = 2
 INPUT_SETTLE_S = 0.25     # after the last input, this long until the full-quality refinement
@@ -80,7 +80,8 @@ class Session:
     # ------------------------------------------------------------ messages
 
     def state(self, now: float) -> dict[str, Any]:
-        return {"type": "state", "version": self.version, "query": encode(self.fog),
+        return {"type": "state", "version": self.version,
+                "query": encode(self.fog) + view_suffix(self.playing, self.speed),
                 "params": self.fog.model_dump(mode="json"), "playing": self.playing,
                 "speed": self.speed, "time": self.sim_time(now), "view": self.view.model_dump()}
 
@@ -103,6 +104,9 @@ class Session:
                 except URLError as exc:
                     return [{"type": "error", "detail": exc.errors, "msg": str(exc)}]
                 self._set_fog(FogParams.model_validate(value), now, input_=False)
+                view = view_state(msg.query.lstrip("?"))
+                self.playing = view.get("playing", True)
+                self.speed = view.get("speed", 1.0)
                 self._rebase(now, self.fog.time)
                 return [self.state(now)]
             if isinstance(msg, (ParamsMsg, CameraMsg)):
@@ -195,6 +199,7 @@ class Session:
                         full=not preview, playing=self.playing)
 
     def frame_done(self, job: FrameJob, sent: bool) -> None:
+        """A frame was sent (or dropped: failed, stale, or the client left)."""
         self.making -= 1
         if sent:
             self.sent = max(self.sent, job.frame)

@@ -137,7 +137,10 @@ class Streamer:
             header = frame_header(job.frame, job.version, job.still.time, render_ms, encode_ms,
                                   job.still.width, job.still.height, job.quality, flags,
                                   job.still.effects.fog_scale)
-            if not client.closed:
+            # a newer frame already went out (frames finish out of order when sizes or
+            # encodes differ): this one is stale, drop it rather than show the past
+            if not client.closed and job.frame > s.sent:
+                s.sent = job.frame
                 await client.send_bytes(header + data)
                 sent = True
                 self.frames_sent += 1

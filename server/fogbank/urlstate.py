@@ -29,6 +29,8 @@ from . import presets as P
 from .params import LAYER_CLASSES, FogParams, StillParams
 
 VERSION = 1
+# Page-only keys: how the page plays the look, not the look. A still ignores them.
+VIEW_KEYS = ("play", "speed")
 _SAFE = ",.-_~"
 _HEX = re.compile(r"^#[0-9a-f]{6}$")
 MAX_QUERY = 16384
@@ -190,6 +192,8 @@ def decode(query: str, cls: type[FogParams] = FogParams) -> tuple[dict, str]:
         if k in fields:
             _err(errors, k, "given more than once", "url_duplicate")
         fields[k] = v
+    for key in VIEW_KEYS:
+        fields.pop(key, None)
     version = fields.pop("v", str(VERSION))
     if version != str(VERSION):
         _err(errors, "v", f"unknown URL version {version!r}; this server reads version {VERSION}",
@@ -280,6 +284,31 @@ def _set(cls, value, key, text, errors) -> None:
         unwrapped = _unwrap(ann)
         ncls = item_ann if is_object_list else (
             unwrapped if isinstance(unwrapped, type) and issubclass(unwrapped, BaseModel) else None)
+
+
+def view_state(query: str) -> dict[str, Any]:
+    """The page-only keys of a query: {"playing": bool, "speed": float} where given.
+    Values that do not parse are ignored (they never change the look)."""
+    out: dict[str, Any] = {}
+    for k, v in parse_qsl(query, keep_blank_values=True):
+        if k == "play" and v in ("0", "1"):
+            out["playing"] = v == "1"
+        elif k == "speed":
+            try:
+                f = float(v)
+            except ValueError:
+                continue
+            if -100 <= f <= 100:
+                out["speed"] = f
+    return out
+
+
+def view_suffix(playing: bool, speed: float) -> str:
+    """The page-only keys that differ from the defaults (playing at speed 1)."""
+    out = "" if playing else "&play=0"
+    if speed != 1.0:
+        out += f"&speed={_format(float(speed))}"
+    return out
 
 
 def canonical(query: str, cls: type[FogParams] = FogParams) -> str:
