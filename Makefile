@@ -11,6 +11,7 @@ run: $(VENV)/.deps
 	$(VENV)/bin/fogbank serve --host $(HOST) --port $(PORT)
 
 test: $(VENV)/.deps
+	./scripts/system-deps.sh --test
 	$(VENV)/bin/python -m pytest -q
 
 gallery: $(VENV)/.deps

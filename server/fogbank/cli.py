@@ -90,6 +90,37 @@ def cmd_gallery(args) -> None:
     print(json.dumps({"renderer": r.info()["renderer"], "results": rows}))
 
 
+def cmd_bench_stream(args) -> None:
+    """Delivered fps and control-to-frame latency against a server (started here unless
+    --url is given)."""
+    import socket
+    import subprocess
+    import urllib.request
+
+    from .bench_stream import run
+    url, proc = args.url, None
+    if not url:
+        with socket.socket() as s:
+            s.bind(("127.0.0.1", 0))
+            port = s.getsockname()[1]
+        proc = subprocess.Popen([sys.executable, "-m", "fogbank.cli", "serve", "--port", str(port)],
+                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        url = f"http://127.0.0.1:{port}"
+        for _ in range(300):
+            try:
+                urllib.request.urlopen(url + "/healthz", timeout=1)
+                break
+            except OSError:
+                time.sleep(0.2)
+    try:
+        rows = run(url.replace("http", "ws", 1), args.query)
+        print(json.dumps(rows))
+    finally:
+        if proc:
+            proc.terminate()
+            proc.wait(20)
+
+
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(prog="fogbank", description="Analytic fog, rendered on the server.")
     sub = ap.add_subparsers(dest="cmd", required=True)
@@ -110,6 +141,10 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--repeat", type=int, default=5)
     p.add_argument("--thumb", type=int, default=640, help="width of the saved JPEGs (0 = full)")
     p.set_defaults(fn=cmd_gallery)
+    p = sub.add_parser("bench-stream", help="delivered fps and control latency over /ws")
+    p.add_argument("--url", help="a running server (default: start one on a free port)")
+    p.add_argument("--query", default="v=1", help="the look to stream")
+    p.set_defaults(fn=cmd_bench_stream)
     args = ap.parse_args(argv)
     args.fn(args)
 

@@ -1,0 +1,212 @@
+"""The page in a real browser: Playwright driving Debian's Chromium against a real
+uvicorn server on 127.0.0.1 (started as its own process, stopped by its PID).
+
+Screenshots go to out/screenshots/ (ignored by git)."""
+
+from __future__ import annotations
+
+import base64
+import io
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+import urllib.request
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+CHROMIUM = "/usr/bin/chromium"
+FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+         "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+SHOTS = Path(__file__).resolve().parents[1] / "out" / "screenshots"
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+class Server:
+    """A fogbank server process on 127.0.0.1, stopped by its PID."""
+
+    def __init__(self, port: int):
+        self.port = port
+        self.url = f"http://127.0.0.1:{port}"
+        self.proc: subprocess.Popen | None = None
+
+    def start(self) -> "Server":
+        self.proc = subprocess.Popen([sys.executable, "-m", "fogbank.cli", "serve", "--host", "127.0.0.1",
+                                      "--port", str(self.port)], stdout=subprocess.DEVNULL,
+                                     stderr=subprocess.DEVNULL)
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline:
+            try:
+                with urllib.request.urlopen(self.url + "/healthz", timeout=2) as r:
+                    if r.status == 200:
+                        return self
+            except OSError:
+                time.sleep(0.2)
+        raise RuntimeError("the server did not start")
+
+    def stop(self, sig=signal.SIGTERM) -> None:
+        if self.proc and self.proc.poll() is None:
+            os.kill(self.proc.pid, sig)
+            try:
+                self.proc.wait(20)
+            except subprocess.TimeoutExpired:
+                os.kill(self.proc.pid, signal.SIGKILL)
+                self.proc.wait(10)
+
+
+@pytest.fixture(scope="module")
+def server():
+    s = Server(free_port()).start()
+    yield s
+    s.stop()
+
+
+@pytest.fixture(scope="module")
+def browser():
+    if not Path(CHROMIUM).exists():
+        pytest.fail(f"{CHROMIUM} is missing: `make test` installs Debian's chromium (as root)")
+    from playwright.sync_api import sync_playwright
+    with sync_playwright() as p:
+        b = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS, headless=True)
+        yield b
+        b.close()
+
+
+def new_page(browser, url, w=1280, h=720):
+    ctx = browser.new_context(viewport={"width": w, "height": h})
+    ctx.grant_permissions(["clipboard-read", "clipboard-write"], origin=url.split("/?")[0].rstrip("/"))
+    page = ctx.new_page()
+    errors = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.goto(url)
+    page.errors = errors
+    return page
+
+
+def wait_frames(page, n=3, timeout=60000):
+    page.wait_for_function(f"Number(document.getElementById('view').dataset.frames || 0) >= {n}",
+                           timeout=timeout)
+
+
+def wait_full_frame_of_current_version(page, timeout=60000):
+    """Until a full-quality frame shows the look the server last confirmed."""
+    page.wait_for_function(
+        "(() => { const c = document.getElementById('view');"
+        " return c.dataset.full === 'true' && Number(c.dataset.version) >= window.fogbank.version; })()",
+        timeout=timeout)
+    time.sleep(0.3)   # let the canvas draw finish
+
+
+def canvas_pixels(page) -> np.ndarray:
+    url = page.evaluate("document.getElementById('view').toDataURL('image/png')")
+    data = base64.b64decode(url.split(",", 1)[1])
+    return np.asarray(Image.open(io.BytesIO(data)).convert("RGB")).astype(int)
+
+
+def test_page_loads_and_frames_arrive(server, browser):
+    page = new_page(browser, server.url + "/")
+    wait_frames(page, 5)
+    assert page.locator("#stat-renderer").inner_text().startswith(("llvmpipe", "NVIDIA", "AMD", "Mesa")) \
+        or page.locator("#stat-renderer").inner_text() != "–"
+    page.wait_for_function("!document.getElementById('stat-fps').textContent.startsWith('0.0')")
+    # controls come from the schema, with labels
+    assert page.locator("[data-path='density']").count() == 1
+    assert page.locator("label[for]").count() > 10
+    SHOTS.mkdir(parents=True, exist_ok=True)
+    page.screenshot(path=str(SHOTS / "page.png"))
+    assert page.errors == []
+    page.context.close()
+
+
+def test_density_control_changes_picture_and_url(server, browser):
+    page = new_page(browser, server.url + "/?v=1&time=4&play=0")
+    wait_frames(page, 2)
+    wait_full_frame_of_current_version(page)
+    before = canvas_pixels(page)
+    page.locator("[data-path='density']").fill("3")
+    page.locator("[data-path='density']").press("Enter")
+    page.wait_for_function("location.search.includes('density=3')")
+    wait_full_frame_of_current_version(page)
+    after = canvas_pixels(page)
+    assert np.abs(after - before).mean() > 4
+    assert page.errors == []
+    page.context.close()
+
+
+def test_copied_url_gives_the_same_picture_as_the_still(server, browser):
+    page = new_page(browser, server.url + "/?v=1&time=6&play=0&camera.yaw=20&density=1.5")
+    wait_frames(page, 2)
+    wait_full_frame_of_current_version(page)
+    page.locator("#copy-link").click()
+    link = page.evaluate("navigator.clipboard.readText()")
+    assert link == page.url and "camera.yaw=20" in link and "play=0" in link
+    page.context.close()
+
+    fresh = new_page(browser, link)
+    wait_frames(fresh, 2)
+    wait_full_frame_of_current_version(fresh)
+    shown = canvas_pixels(fresh)
+    h, w = shown.shape[:2]
+    query = link.split("?", 1)[1]
+    with urllib.request.urlopen(f"{server.url}/api/still.png?{query}&width={w}&height={h}", timeout=60) as r:
+        still = np.asarray(Image.open(io.BytesIO(r.read())).convert("RGB")).astype(int)
+    diff = np.abs(shown - still)
+    # the stream is JPEG (quality 80): small differences, none structural
+    assert diff.mean() < 2.5, diff.mean()
+    assert np.percentile(diff, 99) < 24
+    fresh.context.close()
+
+
+def test_dragging_the_view_moves_the_camera(server, browser):
+    page = new_page(browser, server.url + "/?v=1&time=3&play=0")
+    wait_frames(page, 2)
+    wait_full_frame_of_current_version(page)
+    before = canvas_pixels(page)
+    box = page.locator("#view").bounding_box()
+    x, y = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
+    page.mouse.move(x, y)
+    page.mouse.down()
+    for i in range(1, 11):
+        page.mouse.move(x - 12 * i, y + 2 * i)
+        time.sleep(0.03)
+    page.mouse.up()
+    page.wait_for_function("location.search.includes('camera.yaw=')")
+    yaw = float(page.evaluate("new URLSearchParams(location.search).get('camera.yaw')"))
+    assert yaw != 5.0
+    wait_full_frame_of_current_version(page)
+    assert np.abs(canvas_pixels(page) - before).mean() > 3
+    # the keyboard flies too
+    page.locator("#view").focus()
+    page.keyboard.down("w")
+    time.sleep(0.4)
+    page.keyboard.up("w")
+    page.wait_for_function("location.search.includes('camera.position=')")
+    page.context.close()
+
+
+def test_page_reconnects_after_the_server_restarts(browser):
+    s = Server(free_port()).start()
+    try:
+        page = new_page(browser, s.url + "/?v=1&camera.yaw=30")
+        wait_frames(page, 3)
+        s.stop()
+        page.wait_for_selector("#banner:not([hidden])", timeout=20000)
+        assert "reconnecting" in page.locator("#banner").inner_text().lower()
+        before = int(page.evaluate("document.getElementById('view').dataset.frames"))
+        s.start()
+        page.wait_for_selector("#banner[hidden]", state="attached", timeout=30000)
+        wait_frames(page, before + 3)
+        assert "camera.yaw=30" in page.url   # the same look, from the URL
+        page.context.close()
+    finally:
+        s.stop()
