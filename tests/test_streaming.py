@@ -109,8 +109,14 @@ def test_acks_bound_frames_in_flight_and_latest_wins(client):
         assert states[-2]["params"]["density"] == 4.0
         for h in got:
             ws.send_json({"type": "ack", "frame": h[1]})
-        frames, _ = frames_and_texts(ws, 1)
-        assert frames[0][0][2] == final               # the next frame shows the latest look
+        seen = [h[2] for h in got]
+        for _ in range(4):                            # a frame still being made may come first
+            frames, _ = frames_and_texts(ws, 1)
+            seen.append(frames[0][0][2])
+            if seen[-1] == final:
+                break
+        assert seen[-1] == final                      # the latest look is shown ...
+        assert len(set(seen)) <= 4                    # ... and most of the 12 were skipped
 
 
 def test_errors_keep_the_session(client):
