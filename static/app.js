@@ -192,5 +192,9 @@ setInterval(() => {
   $("stat-size").textContent = stream.lastFrame ? `${(stream.lastFrame.bytes / 1024).toFixed(0)} KB` : "– KB";
 }, 250);
 
+if (innerWidth < 900) {   // phones and narrow windows start with the view, not the panel
+  document.body.classList.add("panel-hidden");
+  $("toggle-panel").setAttribute("aria-expanded", "false");
+}
 sendView();
 stream.connect();
