@@ -59,9 +59,16 @@ def calibration_still(**fog):
       "terms": [{"amp": 0.8, "k": (1.0, 2.0, 0.5), "phase": 0.3}]},
      {"kind": "distance", "start": 5.0, "distance": 150.0, "exponent": 0.8, "low": 0.5,
       "high": 0.9, "max": 0.7, "noise_scale": 40.0}],
+    # particles go through the quad pass; density and max opacity through the composite
+    [{"kind": "particles", "count": 300, "emitter": (0.0, 1.0, -40.0), "spread": 70.0, "speed": 3.0,
+      "radius": 5.0, "alpha": 0.5, "life_min": 30, "life_max": 60},
+     {"kind": "homogeneous", "density": 0.004}],
 ])
-def test_calibration_pixels_match_reference_blend(renderer, layers):
-    still = calibration_still(layers=layers)
+@pytest.mark.parametrize("effects", [{}, {"density": 1.7, "max_opacity": 0.8, "start_distance": 12.0}])
+def test_calibration_pixels_match_reference_blend(renderer, layers, effects):
+    still = calibration_still(layers=layers, time=4.0, density=effects.get("density", 1.0))
+    eff = {k: v for k, v in effects.items() if k != "density"}
+    still = still.model_copy(update={"effects": still.effects.model_copy(update=eff)})
     img = renderer.render(still).astype(np.float64)
     view = cam.view(still.camera, W, H)
     py, px = np.mgrid[0:H, 0:W]

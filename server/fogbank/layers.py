@@ -52,7 +52,8 @@ _CODE = {
 
 def variant(fog: FogParams) -> tuple:
     """What the generated GLSL depends on: per enabled layer, its kind (with the noise
-    mode), its wind flag, and its number of cosine terms."""
+    mode), its wind flag, and its number of cosine terms. Particle layers keep their
+    slot (their data is packed there) whether or not the shader loops over them."""
     key = []
     for layer in fog.layers:
         if not layer.enabled:
@@ -63,10 +64,14 @@ def variant(fog: FogParams) -> tuple:
     return tuple(key)
 
 
-def layer_code(key: tuple) -> str:
-    """The body of fog/layers.gen.glsl for a variant key."""
+def layer_code(key: tuple, inline_particles: bool = True) -> str:
+    """The body of fog/layers.gen.glsl for a variant key. With inline_particles False,
+    particle layers are left to the particle quads pass (passes/particles.*)."""
     lines = []
     for i, (kind, wind, terms) in enumerate(key):
+        if kind == "particles" and not inline_particles:
+            lines.append(f"// layer {i}: particles, drawn as quads")
+            continue
         b = i * LAYER_VEC4
         S = "slide" if wind else "vec3(0.0)"
         O = "(Os - slide)" if wind else "Os"

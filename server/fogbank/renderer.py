@@ -18,7 +18,7 @@ from . import scene as scenes
 from . import terrain
 from collections import OrderedDict
 
-from .layers import DEFINES, layer_code, pack, variant
+from .layers import DEFINES, LAYER_VEC4, layer_code, pack, variant
 from .noise import bake
 from .params import MAX_PARTICLES, FogParams, Particles, StillParams, srgb_to_linear
 from .particles import simulate
@@ -108,14 +108,16 @@ class Renderer:
 
     # ------------------------------------------------------------ programs
 
-    def _program(self, vert: str, frag: str, layers: tuple | None = None, **defines):
+    def _program(self, vert: str, frag: str, layers: tuple | None = None, inline_particles: bool = True,
+                 **defines):
         """A compiled program, cached by its sources, defines and fog layer variant.
         Fullscreen programs get an empty VAO; texture units are set once."""
-        key = (vert, frag, layers, tuple(sorted(defines.items())))
+        key = (vert, frag, layers, inline_particles, tuple(sorted(defines.items())))
         if key in self._programs:
             self._programs.move_to_end(key)
             return self._programs[key]
-        generated = {"fog/layers.gen.glsl": layer_code(layers)} if layers is not None else None
+        generated = {"fog/layers.gen.glsl": layer_code(layers, inline_particles)} \
+            if layers is not None else None
         prog = program(self.ctx, vert, frag, {**DEFINES, **defines}, generated)
         for name, unit in TEX.items():
             _set(prog, name, unit)
@@ -133,7 +135,15 @@ class Renderer:
         return prog
 
     def fog_program(self, fog: FogParams, scale: int):
-        return self._program("passes/fullscreen.vert", "passes/fog.frag", variant(fog), FOG_SCALE=scale)
+        """The fog pass; particles are left to the quads pass."""
+        return self._program("passes/fullscreen.vert", "passes/fog.frag", variant(fog),
+                             inline_particles=False, FOG_SCALE=scale)
+
+    def particles_program(self, scale: int):
+        prog = self._program("passes/particles.vert", "passes/particles.frag", FOG_SCALE=scale)
+        if prog not in self.empty_vao:
+            self.empty_vao[prog] = self.ctx.vertex_array(prog, [])
+        return prog
 
     def rays_program(self, fog: FogParams):
         return self._program("passes/fullscreen.vert", "passes/rays.frag", variant(fog),
@@ -297,6 +307,7 @@ class Renderer:
         states = {i: simulate(l, time, fog.wind.vector(), ground)
                   for i, l in enumerate(fog.layers) if isinstance(l, Particles) and l.enabled}
         data, parts = pack(fog, states)
+        self._packed = (data, parts)
         if "uLayer" in prog:   # constant indexing lets the compiler trim the array
             u = prog["uLayer"]
             u.write(data[:u.array_length].tobytes())
@@ -309,6 +320,37 @@ class Renderer:
         _set(prog, "uCutoffDistance", e.cutoff_distance)
         _set(prog, "uMaxOpacity", e.max_opacity)
         _set(prog, "uDensityPow", fog.density)
+
+    def _particle_quads(self, fog: FogParams, view: cam.View, scale: int) -> None:
+        """Multiply each particle's clarity into the fog target (bound), one instanced
+        quad per particle over the screen bounds of its sphere of influence. The particle
+        texture was filled by _set_fog_uniforms for this frame."""
+        layers = [(i, l) for i, l in enumerate(l for l in fog.layers if l.enabled)
+                  if isinstance(l, Particles)]
+        if not layers:
+            return
+        data, _ = self._packed
+        pp = self.particles_program(scale)
+        for name, v in (("uEye", view.eye), ("uFwd", view.fwd), ("uRight", view.right),
+                        ("uUp", view.up), ("uViewProj", view.view_proj)):
+            _set(pp, name, v)
+        e = fog.effects
+        _set(pp, "uSkyDistance", e.sky_distance)
+        _set(pp, "uStartDistance", e.start_distance)
+        _set(pp, "uCutoffDistance", e.cutoff_distance)
+        self.ctx.enable(moderngl.BLEND)
+        self.ctx.blend_func = moderngl.ZERO, moderngl.SRC_COLOR   # dst *= clarity
+        try:
+            for slot, layer in layers:
+                alpha, radius, first, count = data[slot * LAYER_VEC4]
+                if count < 1:
+                    continue
+                _set(pp, "uFirst", int(first))
+                _set(pp, "uRadius", float(radius))
+                _set(pp, "uAlpha", float(alpha))
+                self.empty_vao[pp].render(moderngl.TRIANGLE_STRIP, vertices=4, instances=int(count))
+        finally:
+            self.ctx.disable(moderngl.BLEND)
 
     def render(self, still: StillParams, slot: str = "still", msaa: bool = True) -> np.ndarray:
         """The frame as (height, width, 3) uint8 sRGB, top row first. `slot` names whose
@@ -332,6 +374,7 @@ class Renderer:
         _set(fp, "uSkyDistance", e.sky_distance)
         g.invdist.use(TEX["uInvDist"])
         self.empty_vao[fp].render(moderngl.TRIANGLES, vertices=3)
+        self._particle_quads(still, view, e.fog_scale)
 
         # composite (with the blur fused, or followed by separate blur passes)
         blur_mode = {"off": 0, "single": 1, "separate": 2}[e.blur]
@@ -343,6 +386,7 @@ class Renderer:
                         ("uSunDir", still.sun.direction()), ("uScatterColor", sun_col * e.scatter)):
             _set(cp, name, v)
         for name, v in (("uScatterExponent", e.scatter_exponent), ("uBlurSigma", sigma),
+                        ("uDensityPow", still.density), ("uMaxOpacity", e.max_opacity),
                         ("uBlurExponent", e.blur_exponent)):
             _set(cp, name, v)
         g.color.use(TEX["uColor"])

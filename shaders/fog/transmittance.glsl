@@ -13,18 +13,19 @@
 #include "fog/particles.glsl"
 #include "fog/noise.glsl"
 #include "fog/distance.glsl"
+#include "fog/finish.glsl"
 
 uniform vec4 uLayer[MAX_LAYERS * LAYER_VEC4];        // per-layer parameters (layers.py)
 uniform vec3 uWind;                                   // m/s
 uniform float uStartDistance;                         // m
 uniform float uCutoffDistance;                        // m, 0 = off
-uniform float uMaxOpacity;
-uniform float uDensityPow;                            // global density
 uniform sampler2D uParticles;                         // (x, y, z, strength) per particle
 uniform sampler3D uNoise;
 
+// The product of every layer's transmittance along the segment, before the global
+// density and max opacity (1 beyond the cutoff distance).
 // O: eye (m), w: unit direction, d: length (m), t: time (s).
-float fogTransmittance(vec3 O, vec3 w, float d, float t) {
+float fogRawTransmittance(vec3 O, vec3 w, float d, float t) {
     if (uCutoffDistance > 0.0 && d > uCutoffDistance) return 1.0;
     vec3 Os = O + w * uStartDistance;                 // the segment begins at the start distance
     float ds = max(d - uStartDistance, 0.0);
@@ -36,8 +37,9 @@ float fogTransmittance(vec3 O, vec3 w, float d, float t) {
     // list of layer kinds (no loop over layers, no branch on kind: llvmpipe runs such
     // code ~10x faster than a generic loop).
 #include "fog/layers.gen.glsl"
-    T *= exp(-tau);
-    // pow(0, 0) is undefined in GLSL; density 0 means no fog at all
-    T = uDensityPow > 0.0 ? pow(T, uDensityPow) : 1.0;
-    return max(T, 1.0 - uMaxOpacity);
+    return T * exp(-tau);
+}
+
+float fogTransmittance(vec3 O, vec3 w, float d, float t) {
+    return fogFinish(fogRawTransmittance(O, w, d, t));
 }

@@ -6,10 +6,11 @@
 // 2 separate passes follow).
 #include "common/camera.glsl"
 #include "common/srgb.glsl"
+#include "fog/finish.glsl"
 in vec2 vUV;
 uniform sampler2D uColor;         // scene colour, linear (bilinear filtering)
 uniform sampler2D uInvDist;       // full-resolution 1/distance
-uniform sampler2D uFog;           // (T, 1/distance) at 1/FOG_SCALE size
+uniform sampler2D uFog;           // (raw T, 1/distance) at 1/FOG_SCALE size
 uniform vec3 uFwd, uRight, uUp;
 uniform vec3 uFogColor;           // linear
 uniform vec3 uSunDir;
@@ -54,7 +55,7 @@ void main() {
     ivec2 px = ivec2(gl_FragCoord.xy);
     vec2 full = vec2(textureSize(uColor, 0));
     float invd = texelFetch(uInvDist, px, 0).r;
-    float T = fogT(px, invd);
+    float T = fogFinish(fogT(px, invd));
     vec3 w = viewRay(vUV * 2.0 - 1.0, uFwd, uRight, uUp);
     vec3 fog = uFogColor + uScatterColor * pow(max(dot(w, uSunDir), 0.0), uScatterExponent);
     vec3 scene = texelFetch(uColor, px, 0).rgb;
