@@ -121,6 +121,11 @@ def cmd_bench_stream(args) -> None:
             proc.wait(20)
 
 
+def cmd_bench(args) -> None:
+    from .bench import run
+    run(args.out, quick=args.quick)
+
+
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(prog="fogbank", description="Analytic fog, rendered on the server.")
     sub = ap.add_subparsers(dest="cmd", required=True)
@@ -141,6 +146,10 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--repeat", type=int, default=5)
     p.add_argument("--thumb", type=int, default=640, help="width of the saved JPEGs (0 = full)")
     p.set_defaults(fn=cmd_gallery)
+    p = sub.add_parser("bench", help="the whole benchmark; writes docs/bench.md and .json")
+    p.add_argument("--out", default="docs")
+    p.add_argument("--quick", action="store_true", help="shorter runs (a smoke test)")
+    p.set_defaults(fn=cmd_bench)
     p = sub.add_parser("bench-stream", help="delivered fps and control latency over /ws")
     p.add_argument("--url", help="a running server (default: start one on a free port)")
     p.add_argument("--query", default="v=1", help="the look to stream")

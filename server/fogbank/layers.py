@@ -91,6 +91,38 @@ def layer_code(key: tuple, inline_particles: bool = True) -> str:
     return "\n".join(lines) + "\n"
 
 
+# The density at x of each exponential kind, for the raymarched comparison ({X}: x slid).
+_DENSITY = {
+    "homogeneous": "rho += homogeneousDensity(uLayer[{b}].x);",
+    "height": "rho += heightDensity({X}, uLayer[{b}].x, uLayer[{b}].y, uLayer[{b}].z);",
+    "polynomial": "rho += uLayer[{b1}].x * polynomialDensity({X}, uLayer[{b}].xyz, uLayer[{b}].w, "
+                  "uLayer[{b1}].y, uLayer[{b1}].z > 0.5, uLayer[{b2}], uLayer[{b3}]);",
+    "potential": "rho += potentialDensity({X}, uLayer[{b}].xyz, uLayer[{b1}].xyz, uLayer[{b}].w, "
+                 "uLayer[{b1}].w, uLayer[{b2}].x);",
+    "sphere": "rho += sphereDensity({X}, uLayer[{b}].xyz, uLayer[{b}].w, uLayer[{b1}].x);",
+}
+
+
+def density_code(key: tuple) -> str:
+    """The body of fog/density.gen.glsl (used only when RAYMARCH_STEPS is defined): the
+    summed density at x of the exponential layers in `key`."""
+    lines = []
+    for i, (kind, wind, terms) in enumerate(key):
+        b = i * LAYER_VEC4
+        X = "(x - slide)" if wind else "x"
+        idx = {f"b{k}": b + k for k in range(1, LAYER_VEC4)}
+        if kind == "cosine":
+            t = " + ".join(f"cosineTermDensity({X} * uLayer[{b}].z, uLayer[{b + 1 + j}].xyz, "
+                           f"uLayer[{b + 1 + j}].w, uLayer[{b + 9 + j // 4}][{j % 4}])"
+                           for j in range(terms)) or "0.0"
+            lines.append(f"rho += uLayer[{b}].x * (uLayer[{b}].y + {t});")
+        elif kind in _DENSITY:
+            lines.append(_DENSITY[kind].format(b=b, X=X, **idx))
+        else:
+            lines.append(f"// layer {i}: {kind} has no raymarched form")
+    return "\n".join(lines) + "\n"
+
+
 def pack(fog: FogParams, particle_states: dict[int, tuple[np.ndarray, np.ndarray]]):
     """Returns (uLayer data float32 (MAX_LAYERS*LAYER_VEC4, 4), particles float32
     (MAX_PARTICLES, 4)) for the enabled layers, in the order of `variant(fog)`."""

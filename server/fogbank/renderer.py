@@ -16,9 +16,10 @@ import numpy as np
 from . import camera as cam
 from . import scene as scenes
 from . import terrain
+import time
 from collections import OrderedDict
 
-from .layers import DEFINES, LAYER_VEC4, layer_code, pack, variant
+from .layers import DEFINES, LAYER_VEC4, density_code, layer_code, pack, variant
 from .noise import bake
 from .params import MAX_PARTICLES, FogParams, Particles, StillParams, srgb_to_linear
 from .particles import simulate
@@ -116,8 +117,8 @@ class Renderer:
         if key in self._programs:
             self._programs.move_to_end(key)
             return self._programs[key]
-        generated = {"fog/layers.gen.glsl": layer_code(layers, inline_particles)} \
-            if layers is not None else None
+        generated = {"fog/layers.gen.glsl": layer_code(layers, inline_particles),
+                     "fog/density.gen.glsl": density_code(layers)} if layers is not None else None
         prog = program(self.ctx, vert, frag, {**DEFINES, **defines}, generated)
         for name, unit in TEX.items():
             _set(prog, name, unit)
@@ -134,10 +135,12 @@ class Renderer:
             old.release()
         return prog
 
-    def fog_program(self, fog: FogParams, scale: int):
-        """The fog pass; particles are left to the quads pass."""
+    def fog_program(self, fog: FogParams, scale: int, raymarch_steps: int | None = None):
+        """The fog pass; particles are left to the quads pass. With raymarch_steps, the
+        exponential layers are raymarched instead (the benchmark's comparison)."""
+        extra = {"RAYMARCH_STEPS": raymarch_steps} if raymarch_steps else {}
         return self._program("passes/fullscreen.vert", "passes/fog.frag", variant(fog),
-                             inline_particles=False, FOG_SCALE=scale)
+                             inline_particles=False, FOG_SCALE=scale, **extra)
 
     def particles_program(self, scale: int):
         prog = self._program("passes/particles.vert", "passes/particles.frag", FOG_SCALE=scale)
@@ -352,6 +355,40 @@ class Renderer:
         finally:
             self.ctx.disable(moderngl.BLEND)
 
+    def _fog_pass(self, still: StillParams, view: cam.View, t: Targets, g: GBuffer,
+                  raymarch_steps: int | None = None) -> moderngl.Texture:
+        """Fog pass at 1/fog_scale, then the particle quads; returns the fog target."""
+        e = still.effects
+        fog_fbo, fog_tex = self._fog_target(t, e.fog_scale)
+        fog_fbo.use()
+        fp = self.fog_program(still, e.fog_scale, raymarch_steps)
+        self._set_fog_uniforms(fp, still, still.time)
+        for name, v in (("uEye", view.eye), ("uFwd", view.fwd), ("uRight", view.right), ("uUp", view.up)):
+            _set(fp, name, v)
+        _set(fp, "uTime", still.time)
+        _set(fp, "uSkyDistance", e.sky_distance)
+        g.invdist.use(TEX["uInvDist"])
+        self.empty_vao[fp].render(moderngl.TRIANGLES, vertices=3)
+        self._particle_quads(still, view, e.fog_scale)
+        return fog_tex
+
+    def fog_only(self, still: StillParams, raymarch_steps: int | None = None, read: bool = True):
+        """The scene pass (cached) and the fog pass alone; with `read`, the raw
+        transmittance and inverse distance per fog texel, bottom row first (benchmarks)."""
+        t = self._targets_for(still.width, still.height)
+        g = self._gbuffer("bench", still.width, still.height)
+        view = cam.view(still.camera, still.width, still.height)
+        self._scene_pass(still, t, g, view, True)
+        self.ctx.finish()
+        t0 = time.perf_counter()
+        tex = self._fog_pass(still, view, t, g, raymarch_steps)
+        self.ctx.finish()
+        ms = (time.perf_counter() - t0) * 1000.0
+        if not read:
+            return ms
+        a = np.frombuffer(tex.read(), np.float32).reshape(tex.height, tex.width, 2)
+        return ms, a[..., 0].copy(), a[..., 1].copy(), view
+
     def render(self, still: StillParams, slot: str = "still", msaa: bool = True) -> np.ndarray:
         """The frame as (height, width, 3) uint8 sRGB, top row first. `slot` names whose
         scene pass is cached (a session id; stills share one); `msaa` off is the cheap
@@ -363,18 +400,7 @@ class Renderer:
         self._scene_pass(still, t, g, view, msaa)
         e = still.effects
 
-        # fog pass at 1/scale
-        fog_fbo, fog_tex = self._fog_target(t, e.fog_scale)
-        fog_fbo.use()
-        fp = self.fog_program(still, e.fog_scale)
-        self._set_fog_uniforms(fp, still, still.time)
-        for name, v in (("uEye", view.eye), ("uFwd", view.fwd), ("uRight", view.right), ("uUp", view.up)):
-            _set(fp, name, v)
-        _set(fp, "uTime", still.time)
-        _set(fp, "uSkyDistance", e.sky_distance)
-        g.invdist.use(TEX["uInvDist"])
-        self.empty_vao[fp].render(moderngl.TRIANGLES, vertices=3)
-        self._particle_quads(still, view, e.fog_scale)
+        fog_tex = self._fog_pass(still, view, t, g)
 
         # composite (with the blur fused, or followed by separate blur passes)
         blur_mode = {"off": 0, "single": 1, "separate": 2}[e.blur]

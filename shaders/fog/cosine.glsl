@@ -8,3 +8,8 @@ float cosineTermOpticalDepth(vec3 O, vec3 w, float d, vec3 k, float phi, float c
     float h = 0.5 * dot(k, w) * d;
     return c * d * cos(A + h) * sinc(h);
 }
+
+// One term's value c cos(k . x + phi) at x (function units), for the raymarched comparison.
+float cosineTermDensity(vec3 x, vec3 k, float phi, float c) {
+    return c * cos(dot(k, x) + phi);
+}

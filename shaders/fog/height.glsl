@@ -10,3 +10,8 @@ float heightOpticalDepth(vec3 O, vec3 w, float d, float rho, float k, float h0) 
     float x = clamp(k * d * w.y, -80.0, 80.0);
     return rho * d * exp(e0) * expRelNeg(x);
 }
+
+// Its density at x (1/m), for the raymarched comparison.
+float heightDensity(vec3 x, float rho, float k, float h0) {
+    return rho * exp(clamp(-k * (x.y - h0), -80.0, 80.0));
+}

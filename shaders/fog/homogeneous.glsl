@@ -2,3 +2,8 @@
 float homogeneousOpticalDepth(float rho, float d) {
     return rho * d;
 }
+
+// Its density at any point (1/m), for the raymarched comparison.
+float homogeneousDensity(float rho) {
+    return rho;
+}

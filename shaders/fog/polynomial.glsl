@@ -39,3 +39,8 @@ float polynomialOpticalDepth(vec3 O, vec3 w, float d, vec3 a, float b, float C, 
     float G1 = polyRunning(u0 + du, C, repeatMode, period, q0, q1);
     return (G1 - G0) * d / du;
 }
+
+// P at x (tiled or zero outside), times nothing: the caller weights it by the density.
+float polynomialDensity(vec3 x, vec3 a, float b, float C, bool repeatMode, vec4 c0, vec4 c1) {
+    return polyTiled(dot(a, x) + b, C, repeatMode, c0, c1);
+}

@@ -21,3 +21,10 @@ float potentialOpticalDepth(vec3 O, vec3 w, float d, vec3 center, vec3 axis,
     float x1 = s * (b + m * d);
     return a * d / K * atanRatio(s * m * d, 1.0 + x0 * x1);
 }
+
+// Its density a / (c + e r^2) at x, for the raymarched comparison.
+float potentialDensity(vec3 x, vec3 center, vec3 axis, float a, float c, float e) {
+    vec3 q = x - center;
+    q -= dot(q, axis) * axis;
+    return a / (c + e * dot(q, q));
+}

@@ -16,3 +16,9 @@ float sphereOpticalDepth(vec3 O, vec3 w, float d, vec3 center, float R, float rh
     float i2 = -(c * t2 + b * t2 * t2 + t2 * t2 * t2 / 3.0);
     return rho * R * (i2 - i1);
 }
+
+// Its density rho max(0, 1 - |x - s|^2 / R^2) at x, for the raymarched comparison.
+float sphereDensity(vec3 x, vec3 center, float R, float rho) {
+    vec3 r = (x - center) / R;
+    return rho * max(0.0, 1.0 - dot(r, r));
+}

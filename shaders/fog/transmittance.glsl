@@ -22,6 +22,26 @@ uniform float uCutoffDistance;                        // m, 0 = off
 uniform sampler2D uParticles;                         // (x, y, z, strength) per particle
 uniform sampler3D uNoise;
 
+#ifdef RAYMARCH_STEPS
+// The same, by raymarching instead of the closed forms: the midpoint rule with
+// RAYMARCH_STEPS samples of the summed density (exponential layers only), for the
+// benchmark that measures what the closed forms save (fog/density.gen.glsl, generated).
+float fogRawTransmittance(vec3 O, vec3 w, float d, float t) {
+    if (uCutoffDistance > 0.0 && d > uCutoffDistance) return 1.0;
+    vec3 Os = O + w * uStartDistance;
+    float ds = max(d - uStartDistance, 0.0);
+    vec3 slide = uWind * t;
+    float h = ds / float(RAYMARCH_STEPS);
+    float tau = 0.0;
+    for (int i = 0; i < RAYMARCH_STEPS; ++i) {
+        vec3 x = Os + w * (h * (float(i) + 0.5));
+        float rho = 0.0;
+#include "fog/density.gen.glsl"
+        tau += rho;
+    }
+    return exp(-tau * h);
+}
+#else
 // The product of every layer's transmittance along the segment, before the global
 // density and max opacity (1 beyond the cutoff distance).
 // O: eye (m), w: unit direction, d: length (m), t: time (s).
@@ -39,6 +59,7 @@ float fogRawTransmittance(vec3 O, vec3 w, float d, float t) {
 #include "fog/layers.gen.glsl"
     return T * exp(-tau);
 }
+#endif
 
 float fogTransmittance(vec3 O, vec3 w, float d, float t) {
     return fogFinish(fogRawTransmittance(O, w, d, t));
