@@ -169,7 +169,7 @@ function sendView() {
   let height = Number($("stream-size").value);
   let width = Math.round(height * aspect / 2) * 2;
   if (width > 1920) { width = 1920; height = Math.round(1920 / aspect / 2) * 2; }
-  stream.setView({ width, height, fps: 30, quality: 80 });
+  stream.setView({ width, height, fps: 60, quality: 80 });
 }
 
 // ------------------------------------------------------------------ overlay

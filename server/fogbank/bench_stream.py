@@ -46,7 +46,7 @@ async def _frames(ws, seconds: float, on_frame=None, on_text=None) -> list[tuple
 
 
 async def delivered_fps(url: str, query: str, width: int, height: int, seconds: float = 8.0,
-                        orbit: bool = False, fps_cap: int = 60) -> dict:
+                        orbit: bool = False, fps_cap: int = 120) -> dict:
     """Frames per second a client receives (after 2 s of warm-up), and the server's
     render and encode times from the frame headers."""
     ws = await _session(url, query, width, height, fps_cap)
@@ -73,7 +73,7 @@ async def delivered_fps(url: str, query: str, width: int, height: int, seconds: 
 async def control_latency(url: str, query: str, width: int, height: int, changes: int = 30) -> dict:
     """Time from sending a params change to the first frame whose params version shows
     it, over `changes` changes spaced 300 ms apart, while time runs."""
-    ws = await _session(url, query, width, height, 60)
+    ws = await _session(url, query, width, height, 120)
     lat: list[float] = []
     try:
         await _frames(ws, 1.5)

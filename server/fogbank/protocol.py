@@ -73,7 +73,7 @@ class ViewMsg(_Msg):
     type: Literal["view"]
     width: int = Field(640, ge=16, le=1920)
     height: int = Field(360, ge=16, le=1080)
-    fps: int = Field(30, ge=1, le=60)
+    fps: int = Field(30, ge=1, le=120)
     quality: int = Field(80, ge=10, le=95)
 
 

@@ -98,6 +98,7 @@ class Renderer:
         self.particles.filter = (moderngl.NEAREST, moderngl.NEAREST)
         self.shadow_tex = ctx.depth_texture((SHADOW_SIZE, SHADOW_SIZE))
         self.shadow_tex.compare_func = "<="
+        self.shadow_tex.filter = (moderngl.LINEAR, moderngl.LINEAR)   # bilinear PCF per tap
         self.shadow_tex.repeat_x = self.shadow_tex.repeat_y = False
         self.shadow_fbo = ctx.framebuffer(depth_attachment=self.shadow_tex)
         self.shadow_key: object = None
@@ -177,7 +178,7 @@ class Renderer:
             vbo = self.ctx.buffer(m.objects.tobytes())
             vaos.append((self.ctx.vertex_array(self.scene_prog, [(vbo, *fmt)]),
                          self.ctx.vertex_array(self.shadow_prog, [(vbo, "3f 28x", "aPos")])))
-            self._meshes[name] = (vaos, m.bounds)
+            self._meshes[name] = (vaos, m.bounds, m.terrain_chunks)
         return self._meshes[name]
 
     def _noise_tex(self, fog: FogParams) -> moderngl.Texture:
@@ -273,7 +274,7 @@ class Renderer:
         if g.scene_key == key:
             return
         ctx = self.ctx
-        vaos, bounds = self._mesh(fog.scene)
+        vaos, bounds, _ = self._mesh(fog.scene)
         sun_vp = self._shadow_pass(fog, vaos, bounds)
         sun_dir = fog.sun.direction()
         sun_col = np.array(srgb_to_linear(fog.sun.color)) * fog.sun.intensity
@@ -298,8 +299,14 @@ class Renderer:
         _set(pr, "uSunColor", sun_col)
         _set(pr, "uShadowTexel", 1.0 / SHADOW_SIZE)
         self.shadow_tex.use(TEX["uShadow"])
-        for scene_vao, _ in vaos:
-            scene_vao.render(moderngl.TRIANGLES)
+        chunks = self._meshes[fog.scene][2]
+        for k, (scene_vao, _) in enumerate(vaos):
+            if k == 0 and len(chunks):   # terrain: nearest chunks first
+                order = np.argsort(np.linalg.norm(chunks[:, 2:5] - view.eye, axis=1))
+                for first, count in chunks[order, :2].astype(int):
+                    scene_vao.render(moderngl.TRIANGLES, vertices=int(count), first=int(first))
+            else:
+                scene_vao.render(moderngl.TRIANGLES)
         ctx.disable(moderngl.DEPTH_TEST)
         if msaa:
             ctx.copy_framebuffer(g.fbo, target)  # MSAA resolve of both colour attachments

@@ -19,12 +19,14 @@ from . import terrain
 from .params import srgb_to_linear
 
 VERTEX_FLOATS = 10
+CHUNKS = 8   # terrain chunks per side
 
 
 @dataclass(frozen=True)
 class Mesh:
     terrain_vertices: np.ndarray   # (N, 10) float32, indexed
-    terrain_indices: np.ndarray    # (M,) uint32
+    terrain_indices: np.ndarray    # (M,) uint32, chunk after chunk
+    terrain_chunks: np.ndarray     # (K, 5): first index, index count, centre x, y, z
     objects: np.ndarray            # (K, 10) float32, plain triangles
     bounds: tuple[np.ndarray, float]  # centre and half-size, for the shadow map
 
@@ -133,13 +135,22 @@ def _terrain_grid(n: int = 288):
     verts[:, 0], verts[:, 1], verts[:, 2] = X.ravel(), Y.ravel(), Z.ravel()
     verts[:, 3:6] = N.reshape(-1, 3)
     verts[:, 9] = 1.0
-    i = np.arange(n - 1)
-    I, J = np.meshgrid(i, i, indexing="xy")
-    a = (J * n + I).ravel()
-    b, c, d = a + 1, a + n, a + n + 1
-    # split each cell along the diagonal that follows the surface better
-    idx = np.stack([a, c, b, b, c, d], 1).ravel().astype(np.uint32)
-    return verts, idx
+    # cells in square chunks, so that the renderer can draw the nearest chunks first
+    # (early depth rejection then skips most hidden terrain fragments)
+    idx, chunks = [], []
+    step = (n - 1) // CHUNKS + 1
+    for j0 in range(0, n - 1, step):
+        for i0 in range(0, n - 1, step):
+            I, J = np.meshgrid(np.arange(i0, min(i0 + step, n - 1)), np.arange(j0, min(j0 + step, n - 1)),
+                               indexing="xy")
+            a = (J * n + I).ravel()
+            b, c, d = a + 1, a + n, a + n + 1
+            tri = np.stack([a, c, b, b, c, d], 1).ravel()
+            first = sum(len(x) for x in idx)
+            centre = verts[tri, :3].mean(axis=0)
+            chunks.append((first, len(tri), *centre))
+            idx.append(tri)
+    return verts, np.concatenate(idx).astype(np.uint32), np.array(chunks, dtype=np.float64)
 
 
 def _tree_spots() -> list[tuple[float, float, str]]:
@@ -255,12 +266,12 @@ def _trees() -> list[np.ndarray]:
 def build(name: str) -> Mesh:
     if name == "calibration":
         return _calibration()
-    tv, ti = _terrain_grid()
+    tv, ti, tc = _terrain_grid()
     E = terrain.EXTENT
     water = _quad((-E, terrain.WATER_LEVEL, E), (E, terrain.WATER_LEVEL, E),
                   (E, terrain.WATER_LEVEL, -E), (-E, terrain.WATER_LEVEL, -E), _rgb("#0e2a30"), 2.0)
     objects = np.concatenate([water] + _house() + _bridge() + _trees())
-    return Mesh(tv, ti, objects, (np.array([0.0, 5.0, 0.0]), E * 1.05))
+    return Mesh(tv, ti, tc, objects, (np.array([0.0, 5.0, 0.0]), E * 1.05))
 
 
 # The calibration scene: unlit, so a pixel's scene colour equals its albedo exactly.
@@ -279,5 +290,5 @@ def _calibration() -> Mesh:
     ground = _quad((-E, 0.0, E), (E, 0.0, E), (E, 0.0, -E), (-E, 0.0, -E), _rgb(CALIBRATION_GROUND), 3.0)
     boxes = [box(lo, hi, _rgb(c), 3.0) for lo, hi, c in CALIBRATION_BOXES]
     empty_v = np.zeros((0, VERTEX_FLOATS), np.float32)
-    return Mesh(empty_v, np.zeros(0, np.uint32), np.concatenate([ground] + boxes),
+    return Mesh(empty_v, np.zeros(0, np.uint32), np.zeros((0, 5)), np.concatenate([ground] + boxes),
                 (np.array([0.0, 0.0, -60.0]), 150.0))

@@ -2,8 +2,8 @@
 sessions, and the /ws endpoint.
 
 The scheduler starts a frame for the next due session in round-robin order, with at most
-`max_jobs` frames queued on the render thread (two: the thread never idles while the
-next frame is being prepared). Each frame is a snapshot of its session (latest wins); it
+`max_jobs` frames on the render thread (one: a second queued frame would only add a
+frame of latency, since encoding already overlaps the next render). Each frame is a snapshot of its session (latest wins); it
 is rendered, JPEG-encoded in a thread pool (overlapping the next render) and sent as
 header + JPEG. A session never has more than MAX_IN_FLIGHT frames unacknowledged, so a
 slow client gets fewer frames, never older ones.
@@ -45,7 +45,7 @@ class Client:
 
 
 class Streamer:
-    def __init__(self, render, pool, max_jobs: int = 2, clock=time.monotonic):
+    def __init__(self, render, pool, max_jobs: int = 1, clock=time.monotonic):
         self.render = render
         self.pool = pool
         self.max_jobs = max_jobs

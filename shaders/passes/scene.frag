@@ -16,17 +16,20 @@ uniform float uShadowTexel;
 layout(location = 0) out vec4 fColor;
 layout(location = 1) out float fInvDist;
 
-// 3x3 percentage-closer filter over the shadow map; 1 = lit.
+// Percentage-closer filter over the shadow map; 1 = lit. The sampler filters linearly,
+// so each tap is a bilinear 2x2 comparison: four taps half a texel apart cover 3x3
+// texels smoothly at less than half the cost of nine point taps.
 float sunVisibility(vec3 n) {
     vec3 p = vSunPos.xyz / vSunPos.w * 0.5 + 0.5;
     if (any(lessThan(p, vec3(0.0))) || any(greaterThan(p, vec3(1.0)))) return 1.0;
     // slope-scaled bias against acne: larger where the surface is grazed by the sun
     float bias = 0.0006 + 0.0025 * (1.0 - clamp(dot(n, uSunDir), 0.0, 1.0));
     float s = 0.0;
-    for (int y = -1; y <= 1; ++y)
-        for (int x = -1; x <= 1; ++x)
-            s += texture(uShadow, vec3(p.xy + vec2(x, y) * uShadowTexel, p.z - bias));
-    return s / 9.0;
+    for (int i = 0; i < 4; ++i) {
+        vec2 o = (vec2(i & 1, i >> 1) - 0.5) * uShadowTexel;
+        s += texture(uShadow, vec3(p.xy + o, p.z - bias));
+    }
+    return s * 0.25;
 }
 
 void main() {

@@ -1,0 +1,42 @@
+"""The benchmark's pieces that carry meaning: the raymarched comparison converges to the
+closed forms (so its step counts are honest), and the report is written from results."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from fogbank.bench import _kind_looks, _reference, markdown
+
+
+@pytest.mark.parametrize("kind", ["homogeneous", "height", "cosine", "polynomial", "potential", "sphere"])
+def test_raymarch_converges_to_the_closed_form(renderer, kind):
+    still = _kind_looks()[kind].model_copy(update={"width": 160, "height": 90})
+    _, T_an, invd, view = renderer.fog_only(still)
+    ref = _reference(still, invd.astype(np.float64), view)
+    assert np.abs(T_an - ref).max() < 1e-3
+    errs = []
+    for steps in (4, 64, 1024):
+        _, T_rm, _, _ = renderer.fog_only(still, raymarch_steps=steps)
+        errs.append(np.abs(T_rm - ref).max())
+    assert errs[-1] < 2e-3
+    assert errs[-1] <= max(errs[0], 1e-4)     # more steps never worse (beyond float32 noise)
+
+
+def test_markdown_report_from_results():
+    res = {"command": "fogbank bench", "cpu": "cpu", "gl": {"renderer": "r", "version": "4.5"}, "date": "d",
+           "analytic_vs_raymarch": [{"kind": "sphere", "analytic_ms": 2.0, "analytic_max_err": 1e-5,
+                                     "raymarch_steps": 100, "raymarch_max_err": 0.003, "raymarch_ms": 30.0,
+                                     "speedup": 15.0}],
+           "biri_table1": [{"fog": "Constant", "fog_texture": "800x600", "fps": 9.0}],
+           "gawron": {"fog_ms": 1.0, "single_ms": 2.0, "separate_ms": 3.0, "single_over_separate": 0.67},
+           "streaming": [{"size": "640x360", "camera": "still", "delivered_fps": 50.0, "render_encode_fps": 55.0,
+                          "ratio": 0.91, "server_render_ms": 10.0, "server_encode_ms": 2.0, "frame_kb": 9.0},
+                         {"size": "640x360", "latency": {"p50_ms": 30, "p95_ms": 40, "p99_ms": 50, "n": 20}}],
+           "concurrency": [{"clients": 1, "per_client_fps": [50.0], "aggregate_fps": 50.0, "fairness": 1.0,
+                            "server_rss_mb": 600.0}],
+           "stills_ms": {"png": 100.0, "jpg": 50.0, "webp": 80.0}}
+    md = markdown(res)
+    assert "| sphere | 2.0 | 1.0e-05 | 100 | 30.0 | 15.0x |" in md
+    assert "| Constant | 800x600 | 9.0 | 512x512 | 6.6 |" in md
+    assert "| 640x360 | 30 | 40 | 50 |" in md
