@@ -32,8 +32,10 @@ def cmd_serve(args) -> None:
 
     from .api import create_app
     from .settings import get_settings
-    settings = get_settings().model_copy(update={"host": args.host, "port": args.port})
-    uvicorn.run(create_app(settings), host=args.host, port=args.port, log_level="info")
+    base = get_settings()
+    settings = base.model_copy(update={"host": args.host or base.host, "port": args.port or base.port})
+    uvicorn.run(create_app(settings), host=settings.host, port=settings.port, log_level="info",
+                ws_max_size=1 << 20)
 
 
 def cmd_still(args) -> None:
@@ -130,8 +132,8 @@ def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(prog="fogbank", description="Analytic fog, rendered on the server.")
     sub = ap.add_subparsers(dest="cmd", required=True)
     p = sub.add_parser("serve", help="run the web service")
-    p.add_argument("--host", default="127.0.0.1")
-    p.add_argument("--port", type=int, default=8000)
+    p.add_argument("--host", help="default: FOGBANK_HOST or 127.0.0.1")
+    p.add_argument("--port", type=int, help="default: FOGBANK_PORT or 8000")
     p.set_defaults(fn=cmd_serve)
     p = sub.add_parser("still", help="render one still to a file",
                        description="params are URL fields: fogbank still --out a.png width=640 camera.yaw=20")
