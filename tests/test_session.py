@@ -27,6 +27,15 @@ def test_fps_cap_and_in_flight_bound():
     assert s.next_due(0.3) == 0.3
 
 
+def test_first_frame_waits_briefly_for_the_view_size():
+    s = Session("a", now=0.0)
+    assert s.next_due(0.0) == 0.3
+    assert s.next_due(0.3) == 0.3          # no view came: the default size then
+    s.apply(msg('{"type": "view", "width": 320, "height": 200}'), 0.1)
+    assert s.next_due(0.1) == 0.1
+    assert s.start_frame(0.1).still.width == 320
+
+
 def test_latest_wins():
     s = Session("a", now=0.0)
     s.apply(msg('{"type": "play", "playing": false}'), 0.0)

@@ -22,6 +22,7 @@ from .urlstate import URLError, decode, encode, view_state, view_suffix
 
 MAX_IN_FLIGHT = 2
 INPUT_SETTLE_S = 0.25     # after the last input, this long until the full-quality refinement
+VIEW_WAIT_S = 0.3         # a new session waits this long for its client's view size
 PREVIEW_QUALITY = 60      # JPEG quality while the user drags
 
 
@@ -49,6 +50,8 @@ class Session:
     def __init__(self, sid: str, now: float, query: str = ""):
         self.id = sid
         self.view = ViewMsg(type="view")
+        self.view_known = False   # frames wait for the client's size (briefly)
+        self.created = now
         self.version = 0
         self.frame = 0            # id of the last frame started
         self.acked = 0            # highest frame id acknowledged
@@ -145,6 +148,7 @@ class Session:
             return [self.state(now)]
         if isinstance(msg, ViewMsg):
             self.view = msg
+            self.view_known = True
             self.dirty = True
             return []
         if isinstance(msg, InteractMsg):
@@ -173,6 +177,8 @@ class Session:
         """When the next frame may start (None: nothing to send until something changes)."""
         if self.in_flight() >= MAX_IN_FLIGHT:
             return None   # an ack or a finished frame wakes the scheduler
+        if not self.view_known and now < self.created + VIEW_WAIT_S:
+            return self.created + VIEW_WAIT_S   # no frame at a size the client did not ask for
         if not self.wants_frame(now):
             if not self.last_full and self.previewing(now):
                 return self.last_input + INPUT_SETTLE_S   # the refinement, once input settles
