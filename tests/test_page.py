@@ -130,7 +130,7 @@ def test_page_loads_and_frames_arrive(server, browser):
 
 def test_density_control_changes_picture_and_url(server, browser):
     page = new_page(browser, server.url + "/?v=1&time=4&play=0")
-    wait_frames(page, 2)
+    wait_frames(page, 1)
     wait_full_frame_of_current_version(page)
     before = canvas_pixels(page)
     page.locator("[data-path='density']").fill("3")
@@ -145,7 +145,7 @@ def test_density_control_changes_picture_and_url(server, browser):
 
 def test_copied_url_gives_the_same_picture_as_the_still(server, browser):
     page = new_page(browser, server.url + "/?v=1&time=6&play=0&camera.yaw=20&density=1.5")
-    wait_frames(page, 2)
+    wait_frames(page, 1)
     wait_full_frame_of_current_version(page)
     page.locator("#copy-link").click()
     link = page.evaluate("navigator.clipboard.readText()")
@@ -153,7 +153,7 @@ def test_copied_url_gives_the_same_picture_as_the_still(server, browser):
     page.context.close()
 
     fresh = new_page(browser, link)
-    wait_frames(fresh, 2)
+    wait_frames(fresh, 1)
     wait_full_frame_of_current_version(fresh)
     shown = canvas_pixels(fresh)
     h, w = shown.shape[:2]
@@ -169,7 +169,7 @@ def test_copied_url_gives_the_same_picture_as_the_still(server, browser):
 
 def test_dragging_the_view_moves_the_camera(server, browser):
     page = new_page(browser, server.url + "/?v=1&time=3&play=0")
-    wait_frames(page, 2)
+    wait_frames(page, 1)
     wait_full_frame_of_current_version(page)
     before = canvas_pixels(page)
     box = page.locator("#view").bounding_box()
