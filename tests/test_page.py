@@ -82,8 +82,10 @@ def browser():
         b.close()
 
 
-def new_page(browser, url, w=1280, h=720):
-    ctx = browser.new_context(viewport={"width": w, "height": h})
+def new_page(browser, url, w=1280, h=720, bypass_csp=True):
+    # Playwright's wait_for_function evaluates strings, which the page's CSP forbids (no
+    # 'unsafe-eval'); test_page_runs_under_its_csp checks the page with the CSP enforced
+    ctx = browser.new_context(viewport={"width": w, "height": h}, bypass_csp=bypass_csp)
     ctx.grant_permissions(["clipboard-read", "clipboard-write"], origin=url.split("/?")[0].rstrip("/"))
     page = ctx.new_page()
     errors = []
@@ -125,6 +127,23 @@ def test_page_loads_and_frames_arrive(server, browser):
     SHOTS.mkdir(parents=True, exist_ok=True)
     page.screenshot(path=str(SHOTS / "page.png"))
     assert page.errors == []
+    page.context.close()
+
+
+def test_page_runs_under_its_csp(server, browser):
+    page = new_page(browser, server.url + "/", bypass_csp=False)
+    violations = []
+    page.on("console", lambda m: violations.append(m.text) if "Content Security Policy" in m.text else None)
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline:
+        if int(page.locator("#view").get_attribute("data-frames") or 0) >= 3:
+            break
+        time.sleep(0.2)
+    assert int(page.locator("#view").get_attribute("data-frames") or 0) >= 3
+    assert violations == [] and page.errors == []
+    with urllib.request.urlopen(server.url + "/") as r:
+        csp = r.headers["Content-Security-Policy"]
+    assert "script-src 'self'" in csp and "unsafe-inline" not in csp and "unsafe-eval" not in csp
     page.context.close()
 
 

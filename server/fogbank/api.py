@@ -12,17 +12,18 @@ from contextlib import asynccontextmanager
 from typing import Any, Literal
 
 import numpy as np
-from fastapi import Body, FastAPI, Request, WebSocket
+from fastapi import Body, FastAPI, HTTPException, Request, WebSocket
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import FileResponse, JSONResponse, Response
 from fastapi.staticfiles import StaticFiles
 from pydantic import BaseModel, Field, ValidationError
 
-from . import STATIC_DIR, __version__
+from . import STATIC_DIR, __version__, metrics
 from . import presets as P
 from .encode import MEDIA_TYPES, encode
 from .params import FogParams, StillParams, Strict, Vec3
 from .render_thread import RenderThread
+from .security import SecurityHeaders, origin_allowed
 from .settings import Settings, get_settings
 from .streaming import Streamer, websocket_endpoint
 from .urlstate import URLError, decode
@@ -93,7 +94,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         state["render"] = rt
         state["pool"] = ThreadPoolExecutor(settings.encode_threads, thread_name_prefix="encode")
         state["cache"] = OrderedDict()
-        state["streamer"] = Streamer(rt, state["pool"])
+        state["stills"] = 0
+        state["streamer"] = Streamer(rt, state["pool"], settings=settings)
         state["streamer"].start()
         yield
         await state["streamer"].stop()
@@ -111,7 +113,12 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 
     async def _run(fn):
         fut = state["render"].submit(fn)
-        return await asyncio.wait_for(asyncio.wrap_future(fut), settings.render_timeout_s)
+        try:
+            return await asyncio.wait_for(asyncio.wrap_future(fut), settings.render_timeout_s)
+        except asyncio.TimeoutError:
+            fut.cancel()
+            raise HTTPException(503, f"the renderer did not answer within {settings.render_timeout_s:g} s",
+                                headers={"Retry-After": "5"}) from None
 
     async def _still(still: StillParams, fmt: str, request: Request) -> Response:
         info = state["render"].info
@@ -125,9 +132,18 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         if etag in cache:
             cache.move_to_end(etag)
             return Response(cache[etag], media_type=MEDIA_TYPES[fmt], headers=headers)
-        img = await _run(lambda r: r.render(still))
-        loop = asyncio.get_running_loop()
-        data = await loop.run_in_executor(state["pool"], encode, img, fmt)
+        if state["stills"] >= settings.max_stills:
+            metrics.ERRORS.labels("busy").inc()
+            raise HTTPException(503, f"{settings.max_stills} stills are rendering; retry shortly",
+                                headers={"Retry-After": "2"})
+        state["stills"] += 1
+        try:
+            img = await _run(lambda r: r.render(still))
+            loop = asyncio.get_running_loop()
+            data = await loop.run_in_executor(state["pool"], encode, img, fmt)
+        finally:
+            state["stills"] -= 1
+        metrics.STILLS.labels(fmt).inc()
         cache[etag] = data
         while len(cache) > 32:
             cache.popitem(last=False)
@@ -198,11 +214,24 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 
     @app.websocket("/ws")
     async def ws(websocket: WebSocket):
+        if not origin_allowed(websocket.headers.get("origin"), websocket.headers.get("host"),
+                              settings.allowed_origins):
+            metrics.ERRORS.labels("origin").inc()
+            await websocket.close(code=1008, reason="origin not allowed")
+            return
         await websocket_endpoint(websocket, state["streamer"], state["render"].info)
+
+    @app.get("/metrics", include_in_schema=False)
+    async def metrics_endpoint():
+        rt = state.get("render")
+        metrics.QUEUE.set(rt.depth() if rt else 0)
+        metrics.SESSIONS.set(len(state["streamer"].clients) if "streamer" in state else 0)
+        return Response(metrics.render(), media_type=metrics.CONTENT_TYPE)
 
     @app.get("/", include_in_schema=False)
     async def index():
         return FileResponse(STATIC_DIR / "index.html")
 
     app.mount("/static", StaticFiles(directory=STATIC_DIR), name="static")
+    app.add_middleware(SecurityHeaders)
     return app

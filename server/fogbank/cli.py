@@ -30,12 +30,14 @@ def _still_params(args):
 def cmd_serve(args) -> None:
     import uvicorn
 
+    from . import logs
     from .api import create_app
     from .settings import get_settings
+    logs.setup()
     base = get_settings()
     settings = base.model_copy(update={"host": args.host or base.host, "port": args.port or base.port})
-    uvicorn.run(create_app(settings), host=settings.host, port=settings.port, log_level="info",
-                ws_max_size=1 << 20)
+    uvicorn.run(create_app(settings), host=settings.host, port=settings.port, log_config=None,
+                ws_max_size=1 << 20, timeout_graceful_shutdown=20, timeout_keep_alive=15)
 
 
 def cmd_still(args) -> None:

@@ -20,6 +20,13 @@ class Settings(BaseSettings):
     gl_device: int | None = Field(None, ge=0, description="EGL device index; unset picks the first")
     render_timeout_s: float = Field(60.0, gt=0, description="how long a request waits for the renderer")
     encode_threads: int = Field(2, ge=1, le=32, description="threads that encode images")
+    max_sessions: int = Field(32, ge=1, le=10000, description="streaming sessions per process; "
+                              "the next is refused with close code 1013")
+    max_stills: int = Field(4, ge=1, le=256, description="still renders at once; beyond, 503")
+    messages_per_s: float = Field(120.0, gt=0, description="per-socket message rate (token bucket)")
+    message_burst: int = Field(240, ge=1, description="per-socket burst of messages")
+    allowed_origins: str = Field("", description="comma-separated Origins allowed on /ws besides "
+                                 "the server's own host; '*' allows any")
 
 
 class SettingsError(ValueError):

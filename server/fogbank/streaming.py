@@ -20,6 +20,7 @@ from typing import Any
 
 from starlette.websockets import WebSocket, WebSocketDisconnect, WebSocketState
 
+from . import metrics
 from .encode import encode
 from .protocol import (FLAG_FULL, FLAG_PLAYING, MAX_MESSAGE, PROTOCOL, ProtocolError, QueryMsg,
                        frame_header, parse)
@@ -45,7 +46,9 @@ class Client:
 
 
 class Streamer:
-    def __init__(self, render, pool, max_jobs: int = 1, clock=time.monotonic):
+    def __init__(self, render, pool, max_jobs: int = 1, clock=time.monotonic, settings=None):
+        from .settings import Settings
+        self.settings = settings or Settings()
         self.render = render
         self.pool = pool
         self.max_jobs = max_jobs
@@ -129,10 +132,12 @@ class Streamer:
             finally:
                 self.jobs -= 1
                 self.wake()
+            metrics.RENDER_MS.observe(render_ms)
             loop = asyncio.get_running_loop()
             t0 = time.perf_counter()
             data = await loop.run_in_executor(self.pool, encode, img, "jpg", job.quality)
             encode_ms = (time.perf_counter() - t0) * 1000.0
+            metrics.ENCODE_MS.observe(encode_ms)
             flags = (FLAG_FULL if job.full else 0) | (FLAG_PLAYING if job.playing else 0)
             header = frame_header(job.frame, job.version, job.still.time, render_ms, encode_ms,
                                   job.still.width, job.still.height, job.quality, flags,
@@ -144,9 +149,11 @@ class Streamer:
                 await client.send_bytes(header + data)
                 sent = True
                 self.frames_sent += 1
+                metrics.FRAMES.inc()
         except Exception as exc:  # noqa: BLE001 - one frame fails, the session goes on
             if not client.closed:
-                log.warning("session %s: frame %d failed: %s", s.id, job.frame, exc)
+                metrics.ERRORS.labels("frame").inc()
+                log.warning("frame failed", extra={"session": s.id, "frame": job.frame, "error": str(exc)})
                 try:
                     await client.send_json({"type": "error", "msg": f"frame {job.frame} failed: {exc}"})
                 except Exception:  # noqa: BLE001
@@ -156,10 +163,33 @@ class Streamer:
             self.wake()
 
 
+class TokenBucket:
+    """At most `rate` messages a second on average, `burst` at once."""
+
+    def __init__(self, rate: float, burst: int, now: float):
+        self.rate, self.burst, self.tokens, self.t = rate, burst, float(burst), now
+
+    def take(self, now: float) -> bool:
+        self.tokens = min(self.burst, self.tokens + (now - self.t) * self.rate)
+        self.t = now
+        if self.tokens >= 1.0:
+            self.tokens -= 1.0
+            return True
+        return False
+
+
 async def websocket_endpoint(ws: WebSocket, streamer: Streamer, renderer_info: dict) -> None:
     """/ws?<look query>: one session. See protocol.py for the messages."""
+    cfg = streamer.settings
     await ws.accept()
+    if len(streamer.clients) >= cfg.max_sessions:
+        metrics.ERRORS.labels("sessions_full").inc()
+        await ws.send_json({"type": "error", "msg": f"the server is full ({cfg.max_sessions} sessions); "
+                            "retry in a few seconds", "retry_after": 5})
+        await ws.close(code=1013, reason="try again later")
+        return
     now = streamer.clock()
+    bucket = TokenBucket(cfg.messages_per_s, cfg.message_burst, now)
     session = Session(uuid.uuid4().hex[:12], now)
     client = Client(session, ws)
     query = ws.url.query
@@ -170,6 +200,7 @@ async def websocket_endpoint(ws: WebSocket, streamer: Streamer, renderer_info: d
     for out in initial:
         await client.send_json(out)
     streamer.add(client)
+    log.info("session opened", extra={"session": session.id, "query": query})
     try:
         while True:
             msg = await ws.receive()
@@ -182,6 +213,11 @@ async def websocket_endpoint(ws: WebSocket, streamer: Streamer, renderer_info: d
             if size > MAX_MESSAGE:
                 await ws.close(code=1009, reason=f"message over {MAX_MESSAGE} bytes")
                 break
+            if not bucket.take(streamer.clock()):
+                metrics.ERRORS.labels("rate").inc()
+                await client.send_json({"type": "error", "msg": f"over {cfg.messages_per_s:g} messages/s: "
+                                        "message dropped", "loc": ["message"]})
+                continue
             try:
                 parsed = parse(data)
             except ProtocolError as exc:
@@ -194,6 +230,7 @@ async def websocket_endpoint(ws: WebSocket, streamer: Streamer, renderer_info: d
         pass
     finally:
         streamer.remove(client)
+        log.info("session closed", extra={"session": session.id, "frames": session.sent})
         if ws.client_state == WebSocketState.CONNECTED:
             try:
                 await ws.close()

@@ -1,0 +1,137 @@
+"""Limits and abuse: session cap (1013), message rate, concurrent stills (503 +
+Retry-After), render timeout, Origin check, CSP, static confinement, metrics."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import threading
+import time
+import urllib.error
+import urllib.request
+
+import pytest
+from fastapi.testclient import TestClient
+from starlette.websockets import WebSocketDisconnect
+
+from fogbank.api import create_app
+from fogbank.settings import Settings
+
+
+@pytest.fixture(scope="module")
+def limited():
+    app = create_app(Settings(max_sessions=1, messages_per_s=5, message_burst=3,
+                              allowed_origins="https://fog.example"))
+    with TestClient(app) as c:
+        yield c
+
+
+def test_session_cap_refuses_with_1013(limited):
+    with limited.websocket_connect("/ws") as a:
+        a.receive_json()
+        with limited.websocket_connect("/ws") as b:
+            msg = b.receive_json()
+            assert msg["type"] == "error" and msg["retry_after"] == 5 and "full" in msg["msg"]
+            m = b.receive()
+            assert m["type"] == "websocket.close" and m["code"] == 1013
+
+
+def test_message_rate_limit(limited):
+    with limited.websocket_connect("/ws") as ws:
+        ws.receive_json(), ws.receive_json()
+        for _ in range(12):
+            ws.send_json({"type": "speed", "speed": 1.0})
+        texts = []
+        while len(texts) < 12:
+            m = ws.receive()
+            if m.get("text"):
+                texts.append(json.loads(m["text"]))
+        dropped = [t for t in texts if t["type"] == "error" and "messages/s" in t["msg"]]
+        assert 5 <= len(dropped) <= 9      # a burst of 3 (plus refill) passes, the rest is dropped
+
+
+@pytest.mark.parametrize("origin,ok", [("https://evil.example", False), ("https://fog.example", True),
+                                       ("http://testserver", True)])
+def test_websocket_origin_check(limited, origin, ok):
+    if ok:
+        with limited.websocket_connect("/ws", headers={"origin": origin}) as ws:
+            assert ws.receive_json()["type"] == "hello"
+    else:
+        with pytest.raises(WebSocketDisconnect) as exc:
+            with limited.websocket_connect("/ws", headers={"origin": origin}) as ws:
+                ws.receive_json()
+        assert exc.value.code == 1008
+
+
+def test_csp_and_static_confinement(client):
+    r = client.get("/")
+    assert "script-src 'self'" in r.headers["content-security-policy"]
+    assert r.headers["x-content-type-options"] == "nosniff"
+    assert "<script" in r.text and "<script>" not in r.text    # no inline script
+    for path in ("/static/../server/fogbank/api.py", "/static/%2e%2e/pyproject.toml",
+                 "/static/..%2fpyproject.toml", "/static//etc/passwd"):
+        assert client.get(path).status_code == 404
+
+
+def test_render_timeout_is_a_503():
+    with TestClient(create_app(Settings(render_timeout_s=0.001))) as c:
+        r = c.get("/api/still.png?width=1920&height=1080&time=3")
+        assert r.status_code == 503
+        assert r.headers["retry-after"] == "5"
+        assert "did not answer" in r.json()["detail"]
+
+
+def test_metrics(client):
+    with client.websocket_connect("/ws") as ws:
+        ws.receive_json(), ws.receive_json()
+        ws.send_json({"type": "view", "width": 64, "height": 64})
+        while not ws.receive().get("bytes"):
+            pass
+    client.get("/api/still.jpg?width=32&height=32&time=1")
+    text = client.get("/metrics").text
+    for name in ("fogbank_frames_total", "fogbank_stills_total", "fogbank_render_ms_bucket",
+                 "fogbank_encode_ms_bucket", "fogbank_sessions", "fogbank_render_queue", "fogbank_errors_total"):
+        assert name in text
+    assert 'fogbank_stills_total{format="jpg"}' in text
+
+
+def test_concurrent_stills_beyond_the_cap_get_503():
+    """A real server with FOGBANK_MAX_STILLS=1: of four simultaneous big stills, the ones
+    that find it busy get 503 with Retry-After; none fail otherwise."""
+    import socket
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    env = {**os.environ, "FOGBANK_MAX_STILLS": "1"}
+    proc = subprocess.Popen([sys.executable, "-m", "fogbank.cli", "serve", "--port", str(port)],
+                            env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        base = f"http://127.0.0.1:{port}"
+        for _ in range(300):
+            try:
+                urllib.request.urlopen(base + "/healthz", timeout=1)
+                break
+            except OSError:
+                time.sleep(0.2)
+        codes, retry = [], []
+
+        def get(i):
+            try:
+                with urllib.request.urlopen(f"{base}/api/still.png?width=1920&height=1080&time={i}",
+                                            timeout=120) as r:
+                    codes.append(r.status)
+            except urllib.error.HTTPError as e:
+                codes.append(e.code)
+                retry.append(e.headers.get("Retry-After"))
+        threads = [threading.Thread(target=get, args=(i,)) for i in range(4)]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+        assert set(codes) <= {200, 503} and 200 in codes and 503 in codes
+        assert all(r == "2" for r in retry)
+    finally:
+        proc.terminate()
+        proc.wait(30)
