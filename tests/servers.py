@@ -1,0 +1,112 @@
+"""Processes the tests start on 127.0.0.1: fogbank servers and nginx, each stopped by the
+PID it was started with."""
+
+from __future__ import annotations
+
+import os
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+import urllib.request
+from pathlib import Path
+
+DOCKER = Path(__file__).resolve().parents[1] / "docker"
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def wait_http(url: str, timeout: float = 60) -> None:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        try:
+            with urllib.request.urlopen(url, timeout=2) as r:
+                if r.status == 200:
+                    return
+        except OSError:
+            time.sleep(0.2)
+    raise RuntimeError(f"{url} did not answer")
+
+
+class Server:
+    """A fogbank server process on 127.0.0.1."""
+
+    def __init__(self, port: int | None = None, env: dict | None = None):
+        self.port = port or free_port()
+        self.url = f"http://127.0.0.1:{self.port}"
+        self.env = env or {}
+        self.proc: subprocess.Popen | None = None
+        self.log = tempfile.NamedTemporaryFile(prefix="fogbank-", suffix=".log", delete=False)
+
+    def start(self) -> "Server":
+        self.proc = subprocess.Popen([sys.executable, "-m", "fogbank.cli", "serve", "--host", "127.0.0.1",
+                                      "--port", str(self.port)], env={**os.environ, **self.env},
+                                     stdout=self.log, stderr=subprocess.STDOUT)
+        wait_http(self.url + "/healthz")
+        return self
+
+    def stop(self, sig=signal.SIGTERM, timeout: float = 30) -> float:
+        """Signal the process by its PID; returns how long it took to exit."""
+        if not self.proc or self.proc.poll() is not None:
+            return 0.0
+        t0 = time.monotonic()
+        os.kill(self.proc.pid, sig)
+        try:
+            self.proc.wait(timeout)
+        except subprocess.TimeoutExpired:
+            os.kill(self.proc.pid, signal.SIGKILL)
+            self.proc.wait(10)
+        return time.monotonic() - t0
+
+    def logs(self) -> str:
+        return Path(self.log.name).read_text(errors="replace")
+
+
+class Nginx:
+    """Debian's nginx with docker/nginx/fogbank.conf in front of `upstreams`, every path
+    (pid, logs, temp) inside a temp dir."""
+
+    def __init__(self, upstreams: list[int]):
+        self.port = free_port()
+        self.url = f"http://127.0.0.1:{self.port}"
+        self.dir = Path(tempfile.mkdtemp(prefix="fogbank-nginx-"))
+        servers = "\n".join(f"        server 127.0.0.1:{p} max_fails=1 fail_timeout=5s;" for p in upstreams)
+        d = self.dir
+        (d / "listen.conf").write_text(f"listen 127.0.0.1:{self.port};\n")
+        (d / "nginx.conf").write_text(f"""
+daemon off;
+worker_processes 1;
+pid {d}/nginx.pid;
+error_log {d}/error.log warn;
+events {{ worker_connections 1024; }}
+http {{
+    access_log {d}/access.log;
+    client_body_temp_path {d}/client_body;
+    proxy_temp_path {d}/proxy;
+    fastcgi_temp_path {d}/fastcgi;
+    uwsgi_temp_path {d}/uwsgi;
+    scgi_temp_path {d}/scgi;
+    upstream fogbank {{
+{servers}
+    }}
+    include {DOCKER}/nginx/fogbank.conf;
+}}
+""")
+        self.proc: subprocess.Popen | None = None
+
+    def start(self) -> "Nginx":
+        self.proc = subprocess.Popen(["nginx", "-p", str(self.dir), "-c", str(self.dir / "nginx.conf")],
+                                     stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        wait_http(self.url + "/healthz")
+        return self
+
+    def stop(self) -> None:
+        if self.proc and self.proc.poll() is None:
+            os.kill(self.proc.pid, signal.SIGTERM)
+            self.proc.wait(20)

@@ -1,0 +1,174 @@
+"""Deployment: the Dockerfile lints clean, the manifests say what they must, and the
+compose topology runs for real here: Debian's nginx with docker/nginx/fogbank.conf in
+front of two fogbank processes on 127.0.0.1. A replica killed with SIGKILL costs a
+reconnect, not the look; SIGTERM drains."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import shutil
+import signal
+import subprocess
+import threading
+import time
+import urllib.request
+from pathlib import Path
+
+import numpy as np
+import pytest
+import websockets
+import yaml
+
+from servers import DOCKER, Nginx, Server
+from test_page import canvas_pixels, new_page, wait_frames, wait_full_frame_of_current_version
+
+
+def run_async(coro):
+    """asyncio.run in a thread of its own: Playwright's sync API keeps a loop running in
+    the test thread once a browser is up."""
+    out = {}
+
+    def target():
+        try:
+            out["value"] = asyncio.run(coro)
+        except BaseException as exc:  # noqa: BLE001 - re-raised in the test thread
+            out["error"] = exc
+    t = threading.Thread(target=target)
+    t.start()
+    t.join()
+    if "error" in out:
+        raise out["error"]
+    return out["value"]
+
+
+def test_dockerfile_lints_clean():
+    hadolint = shutil.which("hadolint") or str(Path(__import__("sys").executable).parent / "hadolint")
+    r = subprocess.run([hadolint, "--config", str(DOCKER / ".hadolint.yaml"), str(DOCKER / "Dockerfile")],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stdout + r.stderr
+    text = (DOCKER / "Dockerfile").read_text()
+    assert "HEALTHCHECK" in text and "/healthz" in text and "USER 10001" in text
+    assert "libegl-mesa0" in text and "GL=nvidia" in text
+
+
+def test_compose_and_kubernetes_manifests():
+    compose = yaml.safe_load((DOCKER / "compose.yaml").read_text())
+    assert compose["services"]["fogbank"]["deploy"]["replicas"] >= 2
+    assert compose["services"]["nginx"]["volumes"]
+    docs = {p.stem: yaml.safe_load(p.read_text()) for p in (DOCKER / "k8s").glob("*.yaml")}
+    c = docs["deployment"]["spec"]["template"]["spec"]["containers"][0]
+    assert c["readinessProbe"]["httpGet"]["path"] == "/healthz"
+    assert c["livenessProbe"]["httpGet"]["path"] == "/healthz"
+    assert docs["hpa"]["spec"]["metrics"][0]["resource"]["name"] == "cpu"
+    ann = docs["ingress"]["metadata"]["annotations"]
+    assert int(ann["nginx.ingress.kubernetes.io/proxy-read-timeout"]) >= 3600
+    assert docs["service"]["spec"]["selector"] == {"app": "fogbank"}
+
+
+@pytest.fixture(scope="module")
+def topology():
+    replicas = [Server().start(), Server().start()]
+    lb = Nginx([r.port for r in replicas]).start()
+    yield lb, replicas
+    lb.stop()
+    for r in replicas:
+        r.stop()
+
+
+def sessions_on(server: Server) -> float:
+    with urllib.request.urlopen(server.url + "/metrics", timeout=5) as r:
+        for line in r.read().decode().splitlines():
+            if line.startswith("fogbank_sessions "):
+                return float(line.split()[1])
+    return 0.0
+
+
+async def ws_frames(url: str, n: int) -> list[bytes]:
+    async with websockets.connect(url.replace("http", "ws", 1) + "/ws?v=1&camera.yaw=40") as ws:
+        assert json.loads(await ws.recv())["type"] == "hello"
+        await ws.recv()
+        await ws.send(json.dumps({"type": "view", "width": 96, "height": 64}))
+        frames = []
+        while len(frames) < n:
+            m = await asyncio.wait_for(ws.recv(), 30)
+            if isinstance(m, bytes):
+                frames.append(m)
+                await ws.send(json.dumps({"type": "ack", "frame": int.from_bytes(m[4:8], "little")}))
+        return frames
+
+
+def test_stills_and_streams_through_nginx(topology):
+    lb, _ = topology
+    with urllib.request.urlopen(lb.url + "/api/still.png?width=64&height=48&time=1", timeout=60) as r:
+        assert r.status == 200 and r.headers["Content-Type"] == "image/png"
+    with urllib.request.urlopen(lb.url + "/") as r:
+        assert "script-src 'self'" in r.headers["Content-Security-Policy"]
+    assert len(run_async(ws_frames(lb.url, 3))) == 3
+
+
+def test_browser_fails_over_when_its_replica_is_killed(browser):
+    replicas = [Server().start(), Server().start()]
+    lb = Nginx([r.port for r in replicas]).start()
+    try:
+        page = new_page(browser, lb.url + "/?v=1&time=5&play=0&camera.yaw=25&density=1.4")
+        wait_frames(page, 1)
+        wait_full_frame_of_current_version(page)
+        before = canvas_pixels(page)
+        url_before = page.url
+        serving = [r for r in replicas if sessions_on(r) >= 1]
+        assert len(serving) == 1
+        frames = int(page.locator("#view").get_attribute("data-frames"))
+        t0 = time.monotonic()
+        serving[0].stop(signal.SIGKILL)
+        deadline = t0 + 10
+        while time.monotonic() < deadline:
+            if int(page.locator("#view").get_attribute("data-frames") or 0) > frames:
+                break
+            time.sleep(0.05)
+        failover = time.monotonic() - t0
+        print(f"\nfailover: first frame from the other replica {failover:.2f} s after SIGKILL")
+        assert failover < 2.0
+        other = [r for r in replicas if r is not serving[0]][0]
+        assert sessions_on(other) >= 1
+        wait_full_frame_of_current_version(page)
+        after = canvas_pixels(page)
+        assert page.url == url_before                        # the same look
+        assert np.abs(after - before).mean() < 1.5          # the same picture (JPEG noise aside)
+        page.context.close()
+    finally:
+        lb.stop()
+        for r in replicas:
+            r.stop(signal.SIGKILL)
+
+
+def test_sigterm_drains():
+    """Stills in progress finish, sockets close with 1012, the process exits in bounded time."""
+    srv = Server().start()
+    result = {}
+
+    def still():
+        t0 = time.monotonic()
+        with urllib.request.urlopen(srv.url + "/api/still.png?width=1920&height=1080&time=9", timeout=60) as r:
+            result["status"], result["bytes"] = r.status, len(r.read())
+        result["s"] = time.monotonic() - t0
+
+    async def stream_then_term():
+        async with websockets.connect(srv.url.replace("http", "ws", 1) + "/ws") as ws:
+            await ws.recv(), await ws.recv()
+            t = threading.Thread(target=still)
+            t.start()
+            await asyncio.sleep(0.15)                       # the still is rendering now
+            exit_s = await asyncio.to_thread(srv.stop, signal.SIGTERM, 40)
+            try:
+                while True:
+                    await asyncio.wait_for(ws.recv(), 5)
+            except websockets.ConnectionClosed as exc:
+                code = exc.rcvd.code if exc.rcvd else None
+            t.join(30)
+            return code, exit_s
+    code, exit_s = run_async(stream_then_term())
+    assert result.get("status") == 200 and result["bytes"] > 10000
+    assert code == 1012
+    assert exit_s < 25
+    assert '"level": "error"' not in srv.logs()
