@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import hashlib
+import json
 import math
 import logging
 from collections import OrderedDict
@@ -12,10 +13,11 @@ from contextlib import asynccontextmanager
 from typing import Any, Literal
 
 import numpy as np
-from fastapi import Body, FastAPI, HTTPException, Request, WebSocket
+from fastapi import FastAPI, HTTPException, Request, WebSocket
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import FileResponse, JSONResponse, Response
 from fastapi.staticfiles import StaticFiles
+from starlette.exceptions import HTTPException as StarletteHTTPException
 from pydantic import BaseModel, Field, ValidationError
 
 from . import STATIC_DIR, __version__, metrics
@@ -35,9 +37,10 @@ MAX_RAYS = 65536
 
 class Ray(Strict):
     origin: Vec3 = Field(description="m")
-    direction: Vec3 = Field(description="normalised by the server; must not be zero")
-    length: float = Field(ge=0, le=1e6, description="m")
-    time: float = Field(0.0, ge=0, le=1e6, description="s")
+    direction: Vec3 = Field(description="normalised by the server; not all zero",
+                            json_schema_extra={"contains": {"not": {"const": 0}}})
+    length: float = Field(ge=0, le=1e6, strict=True, description="m")
+    time: float = Field(0.0, ge=0, le=1e6, strict=True, description="s")
 
 
 class TransmittanceRequest(Strict):
@@ -111,6 +114,15 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     async def _422(request: Request, exc: RequestValidationError):
         return JSONResponse({"detail": [_clean(e) for e in exc.errors()]}, status_code=422)
 
+    @app.exception_handler(StarletteHTTPException)
+    async def _http(request: Request, exc: StarletteHTTPException):
+        if exc.status_code == 400 and "parsing the body" in str(exc.detail):
+            # a body that is not JSON (or not UTF-8): bad input like any other, 422
+            return JSONResponse({"detail": [{"loc": ["body"], "msg": "the body is not valid JSON",
+                                             "type": "json_invalid"}]}, status_code=422)
+        return JSONResponse({"detail": exc.detail}, status_code=exc.status_code,
+                            headers=getattr(exc, "headers", None))
+
     async def _run(fn):
         fut = state["render"].submit(fn)
         try:
@@ -151,7 +163,9 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 
     @app.get("/api/still.{fmt}", summary="Render a still from URL params",
              responses={200: {"content": {m: {} for m in MEDIA_TYPES.values()}},
-                        422: {"description": "a param is invalid; the body names it"}})
+                        304: {"description": "not modified (If-None-Match)"},
+                        422: {"description": "a param is invalid; the body names it"},
+                        503: {"description": "busy or slow renderer; see Retry-After"}})
     async def still_get(fmt: Literal["png", "jpg", "webp"], request: Request):
         """Every param of the page URL (see /api/schema), plus `width` and `height`;
         anything left out comes from the default preset (or `preset=NAME`)."""
@@ -166,26 +180,35 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         return await _still(still, fmt, request)
 
     @app.post("/api/still", summary="Render a still from JSON params",
-              responses={200: {"content": {m: {} for m in MEDIA_TYPES.values()}}})
-    async def still_post(request: Request, format: Literal["png", "jpg", "webp"] = "png",
-                         body: dict[str, Any] = Body(default_factory=dict,
-                                                     description="StillParams fields, a patch "
-                                                                 "over the default preset")):
+              responses={200: {"content": {m: {} for m in MEDIA_TYPES.values()}},
+                         503: {"description": "busy or slow renderer; see Retry-After"}},
+              openapi_extra={"requestBody": {"required": False, "content": {"application/json": {
+                  "schema": {"type": "object", "description": "StillParams fields (see /api/schema), "
+                             "a patch over the default preset"}}}}})
+    async def still_post(request: Request, format: Literal["png", "jpg", "webp"] = "png"):
+        raw = await request.body()
+        try:
+            body = json.loads(raw) if raw.strip() else {}
+        except (ValueError, RecursionError) as exc:
+            raise RequestValidationError([{"loc": ["body"], "msg": f"malformed JSON: {exc}",
+                                           "type": "json_invalid"}]) from None
         return await _still(resolve(body), format, request)
 
     @app.post("/api/transmittance", response_model=TransmittanceResponse,
+              responses={503: {"description": "slow renderer; see Retry-After"}},
               summary="Transmittance of rays through the fog, by the frame's own GLSL")
     async def transmittance(req: TransmittanceRequest):
         fog = resolve(req.params, FogParams, ("body", "params"))
         O = np.array([r.origin for r in req.rays], dtype=np.float64)
         W = np.array([r.direction for r in req.rays], dtype=np.float64)
-        norms = np.linalg.norm(W, axis=1)
-        bad = np.nonzero(~(norms > 1e-12))[0]
+        big = np.abs(W).max(axis=1)
+        bad = np.nonzero(~(big > 0))[0]
         if len(bad):
             raise RequestValidationError([{"loc": ["body", "rays", int(bad[0]), "direction"],
                                            "msg": "direction must be a non-zero vector",
                                            "type": "value_error"}])
-        W = W / norms[:, None]
+        W = W / big[:, None]                  # scaled first: tiny vectors do not underflow
+        W = W / np.linalg.norm(W, axis=1)[:, None]
         D = np.array([r.length for r in req.rays])
         Tm = np.array([r.time for r in req.rays])
         T = await _run(lambda r: r.transmittance(fog, O, W, D, Tm))

@@ -32,7 +32,8 @@ def num(default: float, lo: float, hi: float, step: float, unit: str = "", desc:
         *, gt: bool = False) -> Any:
     """A bounded number with the slider step and unit the page shows."""
     bound = {"gt": lo} if gt else {"ge": lo}
-    return Field(default, le=hi, description=desc, **bound,
+    # strict: a JSON number only (an int is fine), never a boolean or a numeric string
+    return Field(default, le=hi, description=desc, strict=True, **bound,
                  json_schema_extra={"step": step, "unit": unit})
 
 
@@ -45,7 +46,9 @@ def _hex_color(v: str) -> str:
 
 Color = Annotated[str, AfterValidator(_hex_color),
                   Field(json_schema_extra={"format": "color"})]
-Vec3 = tuple[float, float, float]
+Num = Annotated[float, Field(strict=True)]   # a number: not a boolean, not a string
+Int = Annotated[int, Field(strict=True)]
+Vec3 = tuple[Num, Num, Num]
 
 
 def srgb_to_linear(c: str) -> tuple[float, float, float]:
@@ -155,7 +158,7 @@ class Polynomial(LayerBase):
     """Biri 3.2.2: density * P(u), u = axis . x + offset, on [-C, C], tiled or zero outside."""
     kind: Literal["polynomial"] = "polynomial"
     density: float = num(0.02, 0, 10, 0.0005, "1/m", "weight c_i")
-    coeffs: list[float] = Field([0.8, -1.0, 0.0, 0.0, 1.0], min_length=1,
+    coeffs: list[Num] = Field([0.8, -1.0, 0.0, 0.0, 1.0], min_length=1,
                                 max_length=MAX_POLY_COEFFS,
                                 description="P(u) = sum coeffs[i] u^i (ascending powers)")
     axis: Vec3 = Field((1.0 / 60.0, 0.0, 0.0), description="u = axis . x + offset, 1/m")
@@ -203,19 +206,19 @@ class Sphere(LayerBase):
 class Particles(LayerBase):
     """Fischer: a few free-floating particles; T = prod (1 - alpha s_j clamp(1 - dist_j/R, 0, 1))."""
     kind: Literal["particles"] = "particles"
-    count: int = Field(120, ge=1, le=MAX_PARTICLES, description="particles alive at once (slots)")
+    count: int = Field(120, strict=True, ge=1, le=MAX_PARTICLES, description="particles alive at once (slots)")
     emitter: Vec3 = Field((10.0, 2.0, 0.0), description="where particles are born, m")
     direction: Vec3 = Field((0.0, 1.0, 0.0), description="mean launch direction")
     spread: float = num(25.0, 0, 180, 1, "deg", "cone half-angle around direction")
     speed: float = num(1.5, 0, 50, 0.1, "m/s", "launch speed")
-    life_min: int = Field(64, ge=1, le=1000, description="shortest life, steps")
-    life_max: int = Field(128, ge=1, le=1000, description="longest life, steps")
+    life_min: int = Field(64, strict=True, ge=1, le=1000, description="shortest life, steps")
+    life_max: int = Field(128, strict=True, ge=1, le=1000, description="longest life, steps")
     step: float = num(0.1, 0.005, 10, 0.005, "s", "simulation step", gt=True)
     radius: float = num(4.0, 0.01, 100, 0.1, "m", "R_j", gt=True)
     alpha: float = num(0.2, 0, 1, 0.01, "", "max opacity of one particle (0.2 fog, ~1 smoke)")
     gravity: float = num(0.0, -20, 20, 0.1, "m/s^2", "upward acceleration (negative falls)")
     drag: float = num(0.5, 0, 10, 0.05, "1/s", "relaxation of velocity toward the wind")
-    seed: int = Field(1, ge=0, le=2**31 - 1, description="random seed")
+    seed: int = Field(1, strict=True, ge=0, le=2**31 - 1, description="random seed")
 
     @model_validator(mode="after")
     def _life(self) -> "Particles":
@@ -232,7 +235,7 @@ class Noise(LayerBase):
     scale: float = num(60.0, 0.1, 10000, 0.5, "m", "size of one noise tile", gt=True)
     height_falloff: bool = Field(True, description="surface mode: n * dY^2 / 2 + 0.001 (write-up)")
     falloff_scale: float = num(10.0, 0.01, 1000, 0.1, "m", "dY is measured in these units", gt=True)
-    samples: int = Field(16, ge=1, le=128, description="volume mode: samples along the ray")
+    samples: int = Field(16, strict=True, ge=1, le=128, description="volume mode: samples along the ray")
 
 
 class Distance(LayerBase):
@@ -259,10 +262,10 @@ LAYER_CLASSES = {c.model_fields["kind"].default: c for c in
 
 class NoiseBake(Strict):
     """The one tiling noise texture that noise and distance layers sample."""
-    size: int = Field(64, ge=8, le=128, description="texels per side (a power of two is best)")
-    octaves: int = Field(4, ge=1, le=6, description="fractal octaves")
-    blur: int = Field(2, ge=0, le=8, description="binomial blur order (0 = none)")
-    seed: int = Field(7, ge=0, le=2**31 - 1)
+    size: int = Field(64, strict=True, ge=8, le=128, description="texels per side (a power of two is best)")
+    octaves: int = Field(4, strict=True, ge=1, le=6, description="fractal octaves")
+    blur: int = Field(2, strict=True, ge=0, le=8, description="binomial blur order (0 = none)")
+    seed: int = Field(7, strict=True, ge=0, le=2**31 - 1)
 
 
 class Effects(Strict):
@@ -302,8 +305,8 @@ class FogParams(Strict):
 
 class StillParams(FogParams):
     """A still: a look plus its size."""
-    width: int = Field(1280, ge=1, le=4096, description="px")
-    height: int = Field(720, ge=1, le=4096, description="px")
+    width: int = Field(1280, strict=True, ge=1, le=4096, description="px")
+    height: int = Field(720, strict=True, ge=1, le=4096, description="px")
 
     @model_validator(mode="after")
     def _pixels(self) -> "StillParams":
