@@ -95,6 +95,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         await asyncio.get_running_loop().run_in_executor(None, rt.wait_ready)
         log.info("renderer: %s", rt.info)
         state["render"] = rt
+        app.state.render = rt   # reachable for tests and fault injection
         state["pool"] = ThreadPoolExecutor(settings.encode_threads, thread_name_prefix="encode")
         state["cache"] = OrderedDict()
         state["stills"] = 0
@@ -131,6 +132,12 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             fut.cancel()
             raise HTTPException(503, f"the renderer did not answer within {settings.render_timeout_s:g} s",
                                 headers={"Retry-After": "5"}) from None
+        except HTTPException:
+            raise
+        except Exception as exc:  # noqa: BLE001 - a renderer fault fails this request only
+            metrics.ERRORS.labels("render").inc()
+            log.error("render failed", extra={"error": f"{type(exc).__name__}: {exc}"})
+            raise HTTPException(500, f"render failed ({type(exc).__name__}): {exc}") from None
 
     async def _still(still: StillParams, fmt: str, request: Request) -> Response:
         info = state["render"].info

@@ -130,6 +130,45 @@ def cmd_bench(args) -> None:
     run(args.out, quick=args.quick)
 
 
+def cmd_soak(args) -> None:
+    """Soak a server started here (so its memory and log can be read)."""
+    import os
+    import socket
+    import subprocess
+    import tempfile
+    import urllib.request
+
+    from . import soak
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    log = tempfile.NamedTemporaryFile(prefix="fogbank-soak-", suffix=".log", delete=False)
+    proc = subprocess.Popen([sys.executable, "-m", "fogbank.cli", "serve", "--port", str(port)],
+                            stdout=log, stderr=subprocess.STDOUT, env=os.environ.copy())
+    url = f"http://127.0.0.1:{port}"
+    try:
+        for _ in range(300):
+            try:
+                urllib.request.urlopen(url + "/healthz", timeout=1)
+                break
+            except OSError:
+                time.sleep(0.2)
+
+        def rss() -> float:
+            for line in Path(f"/proc/{proc.pid}/status").read_text().splitlines():
+                if line.startswith("VmRSS"):
+                    return int(line.split()[1]) / 1024
+            return 0.0
+        res = soak.run(url, rss, args.clients, args.seconds, lambda: Path(log.name).read_text(errors="replace"))
+    finally:
+        proc.terminate()
+        proc.wait(30)
+    print(soak.report(res))
+    if args.out:
+        soak.write(res, args.out)
+    sys.exit(0 if res["ok"] else 1)
+
+
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(prog="fogbank", description="Analytic fog, rendered on the server.")
     sub = ap.add_subparsers(dest="cmd", required=True)
@@ -154,6 +193,11 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--out", default="docs")
     p.add_argument("--quick", action="store_true", help="shorter runs (a smoke test)")
     p.set_defaults(fn=cmd_bench)
+    p = sub.add_parser("soak", help="N streaming clients for a while; memory, frames, errors")
+    p.add_argument("--clients", type=int, default=8)
+    p.add_argument("--seconds", type=float, default=600.0)
+    p.add_argument("--out", help="write the results as JSON here")
+    p.set_defaults(fn=cmd_soak)
     p = sub.add_parser("bench-stream", help="delivered fps and control latency over /ws")
     p.add_argument("--url", help="a running server (default: start one on a free port)")
     p.add_argument("--query", default="v=1", help="the look to stream")

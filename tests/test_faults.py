@@ -1,0 +1,109 @@
+"""Injected faults fail only the request that hit them, with a clear error; the renderer
+rebuilds itself and other sessions go on."""
+
+from __future__ import annotations
+
+import json
+import os
+import random
+
+import pytest
+from fastapi.testclient import TestClient
+
+import fogbank.renderer as R
+from fogbank.api import create_app
+from fogbank.protocol import HEADER
+
+
+@pytest.fixture
+def app_client():
+    with TestClient(create_app()) as c:
+        yield c
+
+
+def frames(ws, n):
+    got = 0
+    while got < n:
+        m = ws.receive()
+        if m.get("bytes"):
+            got += 1
+            ws.send_json({"type": "ack", "frame": HEADER.unpack(m["bytes"][:36])[1]})
+
+
+def test_shader_compile_failure_fails_only_its_request(app_client, monkeypatch):
+    real = R.layer_code
+
+    def broken(key, inline_particles=True):
+        code = real(key, inline_particles)
+        if any(k == "sphere" for k, _, _ in key):
+            code += "this is not GLSL;\n"
+        return code
+    monkeypatch.setattr(R, "layer_code", broken)
+    with app_client.websocket_connect("/ws") as ws:   # another session streaming meanwhile
+        ws.receive_json(), ws.receive_json()
+        ws.send_json({"type": "view", "width": 64, "height": 48})
+        frames(ws, 2)
+        bad = app_client.get("/api/still.png?width=64&height=48&layers=1&layers.0.kind=sphere")
+        assert bad.status_code == 500
+        detail = bad.json()["detail"]
+        assert "ShaderError" in detail and "fog/layers.gen.glsl" in detail
+        good = app_client.get("/api/still.png?width=64&height=48&layers=1&layers.0.kind=height")
+        assert good.status_code == 200
+        frames(ws, 2)                                   # the session went on
+    metrics = app_client.get("/metrics").text
+    assert 'fogbank_errors_total{kind="render"}' in metrics
+
+
+def test_lost_context_is_rebuilt_and_sessions_go_on(app_client):
+    rt = app_client.app.state.render
+    with app_client.websocket_connect("/ws") as ws:
+        ws.receive_json(), ws.receive_json()
+        ws.send_json({"type": "view", "width": 64, "height": 48})
+        frames(ws, 2)
+        generation = rt.generation
+
+        def lose_context(r):          # what a driver reset looks like to the next GL call
+            r.ctx.release()
+            r.ctx.buffer(b"1234")
+        with pytest.raises(Exception):
+            rt.submit(lose_context).result(30)
+        assert rt.submit(lambda r: None).result(30) is None
+        assert rt.generation == generation + 1
+        assert app_client.get("/api/still.png?width=64&height=48&time=2").status_code == 200
+        ws.send_json({"type": "params", "params": {"density": 1.2}})
+        frames(ws, 3)                 # the session goes on, on the rebuilt renderer
+
+
+def test_random_and_truncated_messages_on_the_socket(app_client):
+    rng = random.Random(7)
+    valid = json.dumps({"type": "params", "params": {"density": 2.0, "camera": {"yaw": 12.0}}})
+    with app_client.websocket_connect("/ws") as ws:
+        ws.receive_json(), ws.receive_json()
+        ws.send_json({"type": "view", "width": 48, "height": 32})
+        sent = 0
+        for i in range(60):
+            kind = i % 3
+            if kind == 0:
+                ws.send_bytes(os.urandom(rng.randint(0, 300)))
+            elif kind == 1:
+                ws.send_text(valid[:rng.randint(0, len(valid) - 1)])
+            else:
+                ws.send_text("".join(chr(rng.randint(1, 0x2FFF)) for _ in range(rng.randint(0, 50))))
+            sent += 1
+        errors = 0
+        while errors < sent:
+            m = ws.receive()
+            if m.get("text"):
+                t = json.loads(m["text"])
+                assert t["type"] in ("error", "state")
+                errors += t["type"] == "error"
+            elif m.get("bytes"):
+                ws.send_json({"type": "ack", "frame": HEADER.unpack(m["bytes"][:36])[1]})
+        ws.send_text(valid)
+        while True:                                     # still alive, still accepting
+            m = ws.receive()
+            if m.get("text") and json.loads(m["text"])["type"] == "state":
+                assert json.loads(m["text"])["params"]["density"] == 2.0
+                break
+            if m.get("bytes"):
+                ws.send_json({"type": "ack", "frame": HEADER.unpack(m["bytes"][:36])[1]})
