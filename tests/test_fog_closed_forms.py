@@ -12,7 +12,7 @@ import pytest
 from scipy.integrate import quad
 
 from fogbank.fog import cosine, height, homogeneous, polynomial, potential, sphere
-from fogbank.params import Cosine, CosineTerm, Height, Homogeneous, Polynomial, Potential, Sphere
+from fogbank.params import Height, Polynomial, Potential, Sphere
 from draws import random_layer, unit
 
 MODULES = {"homogeneous": homogeneous, "height": height, "cosine": cosine,

@@ -23,7 +23,6 @@ import numpy as np
 
 from . import presets as P
 from .encode import encode
-from .fog.transmittance import EXPONENTIAL
 from .params import FogParams, Homogeneous, StillParams
 from .renderer import Renderer, create_context
 
