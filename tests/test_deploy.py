@@ -171,4 +171,8 @@ def test_sigterm_drains():
     assert result.get("status") == 200 and result["bytes"] > 10000
     assert code == 1012
     assert exit_s < 25
-    assert '"level": "error"' not in srv.logs()
+    logs = [json.loads(line) for line in srv.logs().splitlines() if line.startswith("{")]
+    assert logs and all({"ts", "level", "logger", "msg"} <= set(e) for e in logs)   # JSON lines
+    opened = [e for e in logs if e["msg"] == "session opened"]
+    assert opened and len(opened[0]["session"]) == 12                          # with the session id
+    assert not [e for e in logs if e["level"] == "error"]

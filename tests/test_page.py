@@ -174,3 +174,32 @@ def test_page_reconnects_after_the_server_restarts(browser):
         page.context.close()
     finally:
         s.stop()
+
+
+def test_phone_landscape_layout(server, browser):
+    ctx = browser.new_context(viewport={"width": 844, "height": 390}, is_mobile=True, has_touch=True,
+                              bypass_csp=True)
+    page = ctx.new_page()
+    page.goto(server.url + "/")
+    wait_frames(page, 2)
+    view = page.locator("#view").bounding_box()
+    assert view["width"] >= 800 and view["height"] >= 300          # the view gets the screen
+    assert not page.locator("#panel").is_visible()                 # the panel starts folded
+    page.locator("#toggle-panel").click()
+    assert page.locator("#panel").is_visible()
+    assert page.locator("[data-path='density']").is_visible()
+    ctx.close()
+
+
+def test_controls_are_keyboard_reachable_and_labelled(server, browser):
+    page = new_page(browser, server.url + "/")
+    wait_frames(page, 1)
+    unlabelled = page.evaluate("""[...document.querySelectorAll('#controls input, #controls select')]
+        .filter(e => e.type !== 'range' && e.tabIndex >= 0)
+        .filter(e => !(e.labels && e.labels.length) && !e.getAttribute('aria-label')).length""")
+    assert unlabelled == 0
+    page.locator("#preset").focus()
+    for _ in range(12):
+        page.keyboard.press("Tab")
+    assert page.evaluate("document.activeElement.tagName") in ("BUTTON", "SELECT", "INPUT")
+    page.context.close()
