@@ -174,3 +174,16 @@ def test_any_valid_look_renders(renderer):
         img = renderer.render(still)
         assert img.shape == (still.height, still.width, 3)
         assert renderer.ctx.error == "GL_NO_ERROR"
+
+
+def test_preview_reuses_a_full_quality_scene_pass(renderer):
+    still = StillParams(width=W, height=H, layers=[{"kind": "homogeneous", "density": 0.02}])
+    full = renderer.render(still, slot="preview-test", msaa=True)
+    g = renderer._gbuffer("preview-test", W, H)
+    key = g.scene_key
+    preview = renderer.render(still, slot="preview-test", msaa=False)
+    assert g.scene_key == key                       # no redraw without MSAA
+    assert np.array_equal(full, preview)            # and the same pixels
+    moved = still.model_copy(update={"camera": still.camera.model_copy(update={"yaw": 9.0})})
+    renderer.render(moved, slot="preview-test", msaa=False)
+    assert g.scene_key[-1] is False                 # a new view: the cheap pass

@@ -271,8 +271,8 @@ class Renderer:
 
     def _scene_pass(self, fog: FogParams, t: Targets, g: GBuffer, view: cam.View, msaa: bool) -> None:
         key = (fog.scene, fog.camera, fog.sun, msaa)
-        if g.scene_key == key:
-            return
+        if g.scene_key == key or (not msaa and g.scene_key == key[:3] + (True,)):
+            return   # cached; a preview happily reuses a full-quality scene pass
         ctx = self.ctx
         vaos, bounds, _ = self._mesh(fog.scene)
         sun_vp = self._shadow_pass(fog, vaos, bounds)
