@@ -11,9 +11,7 @@ import asyncio
 import json
 import os
 import platform
-import socket
 import statistics
-import subprocess
 import sys
 import time
 import urllib.request
@@ -22,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from . import presets as P
+from .child import ChildServer
 from .encode import encode
 from .params import FogParams, Homogeneous, StillParams
 from .renderer import Renderer, create_context
@@ -188,34 +187,7 @@ def _timed(f) -> float:
 
 # ---------------------------------------------------------------- 4-6: the service
 
-class _Server:
-    def __init__(self):
-        with socket.socket() as s:
-            s.bind(("127.0.0.1", 0))
-            self.port = s.getsockname()[1]
-        self.proc = subprocess.Popen([sys.executable, "-m", "fogbank.cli", "serve", "--port", str(self.port)],
-                                     stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        self.url = f"http://127.0.0.1:{self.port}"
-        for _ in range(300):
-            try:
-                urllib.request.urlopen(self.url + "/healthz", timeout=1)
-                return
-            except OSError:
-                time.sleep(0.2)
-        raise RuntimeError("server did not start")
-
-    def rss_mb(self) -> float:
-        for line in Path(f"/proc/{self.proc.pid}/status").read_text().splitlines():
-            if line.startswith("VmRSS"):
-                return int(line.split()[1]) / 1024
-        return 0.0
-
-    def stop(self):
-        self.proc.terminate()
-        self.proc.wait(30)
-
-
-def streaming(r: Renderer, srv: _Server, seconds: float) -> list[dict]:
+def streaming(r: Renderer, srv: ChildServer, seconds: float) -> list[dict]:
     from .bench_stream import control_latency, delivered_fps
     from .session import PREVIEW_QUALITY
     rows = []
@@ -254,7 +226,7 @@ def streaming(r: Renderer, srv: _Server, seconds: float) -> list[dict]:
     return rows
 
 
-def concurrency(srv: _Server, seconds: float) -> list[dict]:
+def concurrency(srv: ChildServer, seconds: float) -> list[dict]:
     from .bench_stream import delivered_fps
     ws = srv.url.replace("http", "ws", 1)
     rows = []
@@ -272,7 +244,7 @@ def concurrency(srv: _Server, seconds: float) -> list[dict]:
     return rows
 
 
-def stills(srv: _Server, repeat: int = 3) -> dict:
+def stills(srv: ChildServer, repeat: int = 3) -> dict:
     out = {}
     for fmt in ("png", "jpg", "webp"):
         def once(i):
@@ -302,7 +274,7 @@ def run(out_dir: str = "docs", quick: bool = False) -> dict:
     res["biri_table1"] = biri_table1(r)
     print("3. Gawron Tables 2 and 3 (1920x1080)")
     res["gawron"] = gawron(r)
-    srv = _Server()
+    srv = ChildServer()
     try:
         print("4. streaming (default preset)")
         res["streaming"] = streaming(r, srv, seconds)

@@ -97,32 +97,15 @@ def cmd_gallery(args) -> None:
 def cmd_bench_stream(args) -> None:
     """Delivered fps and control-to-frame latency against a server (started here unless
     --url is given)."""
-    import socket
-    import subprocess
-    import urllib.request
-
     from .bench_stream import run
-    url, proc = args.url, None
-    if not url:
-        with socket.socket() as s:
-            s.bind(("127.0.0.1", 0))
-            port = s.getsockname()[1]
-        proc = subprocess.Popen([sys.executable, "-m", "fogbank.cli", "serve", "--port", str(port)],
-                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        url = f"http://127.0.0.1:{port}"
-        for _ in range(300):
-            try:
-                urllib.request.urlopen(url + "/healthz", timeout=1)
-                break
-            except OSError:
-                time.sleep(0.2)
+    from .child import ChildServer
+    srv = None if args.url else ChildServer()
     try:
-        rows = run(url.replace("http", "ws", 1), args.query)
+        rows = run((args.url or srv.url).replace("http", "ws", 1), args.query)
         print(json.dumps(rows))
     finally:
-        if proc:
-            proc.terminate()
-            proc.wait(20)
+        if srv:
+            srv.stop()
 
 
 def cmd_bench(args) -> None:
@@ -131,38 +114,14 @@ def cmd_bench(args) -> None:
 
 
 def cmd_soak(args) -> None:
-    """Soak a server started here (so its memory and log can be read)."""
-    import os
-    import socket
-    import subprocess
-    import tempfile
-    import urllib.request
-
+    """Soak a server started here (so that its memory and log can be read)."""
     from . import soak
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port = s.getsockname()[1]
-    log = tempfile.NamedTemporaryFile(prefix="fogbank-soak-", suffix=".log", delete=False)
-    proc = subprocess.Popen([sys.executable, "-m", "fogbank.cli", "serve", "--port", str(port)],
-                            stdout=log, stderr=subprocess.STDOUT, env=os.environ.copy())
-    url = f"http://127.0.0.1:{port}"
+    from .child import ChildServer
+    srv = ChildServer()
     try:
-        for _ in range(300):
-            try:
-                urllib.request.urlopen(url + "/healthz", timeout=1)
-                break
-            except OSError:
-                time.sleep(0.2)
-
-        def rss() -> float:
-            for line in Path(f"/proc/{proc.pid}/status").read_text().splitlines():
-                if line.startswith("VmRSS"):
-                    return int(line.split()[1]) / 1024
-            return 0.0
-        res = soak.run(url, rss, args.clients, args.seconds, lambda: Path(log.name).read_text(errors="replace"))
+        res = soak.run(srv.url, srv.rss_mb, args.clients, args.seconds, srv.log_text)
     finally:
-        proc.terminate()
-        proc.wait(30)
+        srv.stop()
     print(soak.report(res))
     if args.out:
         soak.write(res, args.out)
