@@ -103,7 +103,8 @@ function selectControl(path, node, options, value, onChange) {
 }
 
 function field(schema, path, node, value, onChange, ctx) {
-  const title = node && node.title;   // the property's own title beats its class name
+  // the property's own title (or name) beats the title of the class it refers to
+  const title = (node && node.title) || (node && node.$ref ? path.at(-1).replace(/_/g, " ") : undefined);
   node = resolve(schema, node) || {};
   if (title && !node.$ref) node = { ...node, title };
   if (node.const !== undefined || path.at(-1) === "kind") return null;
