@@ -76,7 +76,7 @@ class Nginx:
         self.port = free_port()
         self.url = f"http://127.0.0.1:{self.port}"
         self.dir = Path(tempfile.mkdtemp(prefix="fogbank-nginx-"))
-        servers = "\n".join(f"        server 127.0.0.1:{p} max_fails=1 fail_timeout=5s;" for p in upstreams)
+        servers = "\n".join(f"        server 127.0.0.1:{p} max_fails=3 fail_timeout=5s;" for p in upstreams)
         d = self.dir
         (d / "listen.conf").write_text(f"listen 127.0.0.1:{self.port};\n")
         (d / "nginx.conf").write_text(f"""

@@ -58,7 +58,7 @@ def test_compose_and_kubernetes_manifests():
     assert compose["services"]["nginx"]["volumes"]
     docs = {p.stem: yaml.safe_load(p.read_text()) for p in (DOCKER / "k8s").glob("*.yaml")}
     c = docs["deployment"]["spec"]["template"]["spec"]["containers"][0]
-    assert c["readinessProbe"]["httpGet"]["path"] == "/healthz"
+    assert c["readinessProbe"]["httpGet"]["path"] == "/readyz"
     assert c["livenessProbe"]["httpGet"]["path"] == "/healthz"
     assert docs["hpa"]["spec"]["metrics"][0]["resource"]["name"] == "cpu"
     ann = docs["ingress"]["metadata"]["annotations"]

@@ -10,7 +10,8 @@ import random
 import pytest
 from fastapi.testclient import TestClient
 
-import fogbank.renderer as R
+import faults
+from fogbank import worker
 from fogbank.api import create_app
 from fogbank.protocol import HEADER
 
@@ -30,15 +31,14 @@ def frames(ws, n):
             ws.send_json({"type": "ack", "frame": HEADER.unpack(m["bytes"][:36])[1]})
 
 
-def test_shader_compile_failure_fails_only_its_request(app_client, monkeypatch):
-    real = R.layer_code
+def in_workers(client, fn, *args):
+    """Run `fn(*args)` as a job on every render worker of the app."""
+    sup = client.app.state.workers
+    return [client.portal.call(lambda s=s: sup.call(s, fn, *args, deadline=30)) for s in sup.slots()]
 
-    def broken(key, inline_particles=True):
-        code = real(key, inline_particles)
-        if any(k == "sphere" for k, _, _ in key):
-            code += "this is not GLSL;\n"
-        return code
-    monkeypatch.setattr(R, "layer_code", broken)
+
+def test_shader_compile_failure_fails_only_its_request(app_client):
+    in_workers(app_client, faults.break_sphere_shaders)
     with app_client.websocket_connect("/ws") as ws:   # another session streaming meanwhile
         ws.receive_json(), ws.receive_json()
         ws.send_json({"type": "view", "width": 64, "height": 48})
@@ -55,20 +55,18 @@ def test_shader_compile_failure_fails_only_its_request(app_client, monkeypatch):
 
 
 def test_lost_context_is_rebuilt_and_sessions_go_on(app_client):
-    rt = app_client.app.state.render
+    sup = app_client.app.state.workers
+    slot = sup.interactive.slots[0]
     with app_client.websocket_connect("/ws") as ws:
         ws.receive_json(), ws.receive_json()
         ws.send_json({"type": "view", "width": 64, "height": 48})
         frames(ws, 2)
-        generation = rt.generation
-
-        def lose_context(r):          # what a driver reset looks like to the next GL call
-            r.ctx.release()
-            r.ctx.buffer(b"1234")
-        with pytest.raises(Exception):
-            rt.submit(lose_context).result(30)
-        assert rt.submit(lambda r: None).result(30) is None
-        assert rt.generation == generation + 1
+        pid = slot.pid
+        with pytest.raises(Exception):   # what a driver reset looks like to the next GL call
+            app_client.portal.call(lambda: sup.call(slot, worker.lose_context, deadline=30))
+        probe = app_client.portal.call(lambda: sup.call(slot, worker.probe, deadline=30))
+        assert probe["ok"] is True
+        assert probe["pid"] == pid          # rebuilt inside the same worker
         assert app_client.get("/api/still.png?width=64&height=48&time=2").status_code == 200
         ws.send_json({"type": "params", "params": {"density": 1.2}})
         frames(ws, 3)                 # the session goes on, on the rebuilt renderer

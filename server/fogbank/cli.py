@@ -32,12 +32,27 @@ def cmd_serve(args) -> None:
 
     from . import logs
     from .api import create_app
+    from .limits import MAX_HEAD_BYTES, json_h11_protocol
+    from .protocol import MAX_MESSAGE
     from .settings import get_settings
     logs.setup()
     base = get_settings()
     settings = base.model_copy(update={"host": args.host or base.host, "port": args.port or base.port})
-    uvicorn.run(create_app(settings), host=settings.host, port=settings.port, log_config=None,
-                ws_max_size=1 << 20, timeout_graceful_shutdown=20, timeout_keep_alive=15)
+    app = create_app(settings)
+    # h11 bounds the bytes it buffers for a request head (httptools does not); the app's
+    # RequestLimits answers in JSON below that bound. A WebSocket message is refused by
+    # the protocol past twice MAX_MESSAGE, by the app (1009, with a reason) past MAX_MESSAGE.
+    config = uvicorn.Config(app, host=settings.host, port=settings.port, log_config=None, http=json_h11_protocol(),
+                            h11_max_incomplete_event_size=MAX_HEAD_BYTES, ws="websockets",
+                            ws_max_size=2 * MAX_MESSAGE, timeout_graceful_shutdown=20,
+                            timeout_keep_alive=15, proxy_headers=True,
+                            forwarded_allow_ips=settings.forwarded_allow_ips)
+
+    class Server(uvicorn.Server):
+        def handle_exit(self, sig, frame):   # readiness turns to "draining" at once
+            app.state.drain()
+            super().handle_exit(sig, frame)
+    Server(config).run()
 
 
 def cmd_still(args) -> None:

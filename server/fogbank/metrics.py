@@ -16,6 +16,18 @@ ENCODE_MS = Histogram("fogbank_encode_ms", "encode time of a stream frame, ms", 
                       registry=REGISTRY)
 SESSIONS = Gauge("fogbank_sessions", "open streaming sessions", registry=REGISTRY)
 QUEUE = Gauge("fogbank_render_queue", "jobs waiting for the render thread", registry=REGISTRY)
+WORKER_RESTARTS = Counter("fogbank_worker_restarts_total", "render workers replaced, by lane and why "
+                          "(deadline: killed past a job's deadline; died; memory: over its budget)",
+                          ["lane", "why"], registry=REGISTRY)
+DEADLINE_KILLS = Counter("fogbank_deadline_kills_total", "jobs stopped at their deadline (worker killed)",
+                         ["lane"], registry=REGISTRY)
+WORKER_RSS = Gauge("fogbank_worker_rss_bytes", "resident memory of each render worker, after its last job",
+                   ["lane", "worker"], registry=REGISTRY)
+TREE_RSS = Gauge("fogbank_tree_rss_bytes", "resident memory of the web process and its workers",
+                 registry=REGISTRY)
+QUEUE_WAIT = Histogram("fogbank_queue_wait_seconds", "time a job waited for its worker (incl. transfer)",
+                       ["lane"], buckets=(0.001, 0.005, 0.01, 0.025, 0.05, 0.1, 0.25, 0.5, 1, 2.5, 5, 10, 30),
+                       registry=REGISTRY)
 ERRORS = Counter("fogbank_errors_total", "errors by kind", ["kind"], registry=REGISTRY)
 
 

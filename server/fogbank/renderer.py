@@ -1,7 +1,7 @@
 """The GL renderer: scene pass, fog pass, composite, blur, readback.
 
-Owned by one thread (render_thread.py): every method here makes GL calls and must run
-on the thread that created the context. Programs, meshes, the noise texture and the
+Owned by one render worker process (worker.py): every method here makes GL calls and
+must run on the thread that created the context. Programs, meshes, the noise texture and the
 render targets are built once and reused; the scene pass (G-buffer) is cached while
 scene, camera, sun and size do not change.
 """
@@ -24,11 +24,13 @@ from .noise import bake
 from .params import MAX_PARTICLES, FogParams, Particles, StillParams, srgb_to_linear
 from .particles import simulate
 from .shaders import program
+from .gpu_cache import ByteLRU
 
 MSAA_SAMPLES = 4
 SHADOW_SIZE = 2048
 RAYS_PER_ROW = 1024
-MAX_GBUFFERS = 16   # cached scene passes (sessions x sizes)
+SIM_CACHE = 64            # particle states kept (at most 16 layers x 1024 particles each)
+CACHE_BYTES = 256 << 20   # default byte budget of each GL cache (targets, scene passes)
 TEX = {"uColor": 0, "uInvDist": 1, "uFog": 2, "uParticles": 3, "uNoise": 4, "uShadow": 5,
        "uRays": 6, "uImage": 0}
 
@@ -54,20 +56,51 @@ def _set(prog, name: str, value) -> None:
         u.value = value
 
 
+def release_fbo(fbo: moderngl.Framebuffer | None) -> None:
+    """Release a framebuffer and everything attached to it (renderbuffers and textures):
+    releasing the framebuffer alone leaves its attachments allocated."""
+    if fbo is None:
+        return
+    attachments = list(fbo.color_attachments) + [fbo.depth_attachment]
+    fbo.release()
+    for a in attachments:
+        if a is not None:
+            a.release()
+
+
+# bytes per pixel of each GPU allocation (for the caches' byte budgets)
+OUT_BPP = 4                                   # RGBA8 output renderbuffer
+MSAA_BPP = MSAA_SAMPLES * (8 + 4 + 4)         # RGBA16F + R32F + depth24/stencil8, per sample
+LINEAR_BPP = 2 * 8                            # two RGBA16F blur targets
+GBUFFER_BPP = 8 + 4 + 4                       # RGBA16F colour, R32F inverse distance, depth
+
+
 @dataclass
 class Targets:
     """Scratch render targets for one frame size, shared by every caller (one frame is
-    drawn at a time on the render thread)."""
+    drawn at a time by a worker)."""
     size: tuple[int, int]
     out: moderngl.Framebuffer
     msaa: moderngl.Framebuffer | None = None
     fog: dict[int, tuple[moderngl.Framebuffer, moderngl.Texture]] = field(default_factory=dict)
     linear: list[tuple[moderngl.Framebuffer, moderngl.Texture]] = field(default_factory=list)
 
+    def nbytes(self) -> int:
+        w, h = self.size
+        n = w * h * OUT_BPP
+        if self.msaa is not None:
+            n += w * h * MSAA_BPP
+        for scale in self.fog:
+            n += -(-w // scale) * -(-h // scale) * 8
+        n += len(self.linear) * w * h * 8
+        return n
+
     def release(self) -> None:
-        for obj in [self.out, self.msaa] + [f for f, _ in self.fog.values()] + [f for f, _ in self.linear]:
-            if obj is not None:
-                obj.release()
+        for fbo in [self.out, self.msaa] + [f for f, _ in self.fog.values()] + [f for f, _ in self.linear]:
+            release_fbo(fbo)
+        self.fog.clear()
+        self.linear.clear()
+        self.msaa = None
 
 
 @dataclass
@@ -79,14 +112,15 @@ class GBuffer:
     invdist: moderngl.Texture
     scene_key: object = None
 
+    def nbytes(self) -> int:
+        return self.color.width * self.color.height * GBUFFER_BPP
+
     def release(self) -> None:
-        self.fbo.release()
-        self.color.release()
-        self.invdist.release()
+        release_fbo(self.fbo)   # colour, inverse distance and the depth renderbuffer
 
 
 class Renderer:
-    def __init__(self, ctx: moderngl.Context):
+    def __init__(self, ctx: moderngl.Context, cache_bytes: int = CACHE_BYTES):
         self.ctx = ctx
         self.empty_vao: dict = {}
         self._programs: OrderedDict = OrderedDict()
@@ -103,10 +137,12 @@ class Renderer:
         self.shadow_fbo = ctx.framebuffer(depth_attachment=self.shadow_tex)
         self.shadow_key: object = None
         self._meshes: dict[str, tuple] = {}
-        self._targets: OrderedDict = OrderedDict()    # (w, h) -> Targets
-        self._gbuffers: OrderedDict = OrderedDict()   # (slot, w, h) -> GBuffer
+        self._targets = ByteLRU(cache_bytes)    # (w, h) -> Targets
+        self._gbuffers = ByteLRU(cache_bytes)   # (slot, w, h) -> GBuffer
         self._noise: dict[tuple, moderngl.Texture] = {}
         self._rays_fbo: tuple | None = None
+        self._sim_cache: OrderedDict = OrderedDict()
+        self._probe_fbo: moderngl.Framebuffer | None = None
 
     # ------------------------------------------------------------ programs
 
@@ -163,6 +199,16 @@ class Renderer:
         i = self.ctx.info
         return {"renderer": i["GL_RENDERER"], "version": i["GL_VERSION"], "vendor": i["GL_VENDOR"]}
 
+    def probe(self) -> bool:
+        """Clear a 2x2 target to a known colour and read it back (a liveness probe that
+        goes through the GL pipeline, not just the Python side)."""
+        if self._probe_fbo is None:
+            self._probe_fbo = self.ctx.framebuffer(color_attachments=[self.ctx.renderbuffer((2, 2), 4)])
+        self._probe_fbo.use()
+        self._probe_fbo.clear(0.2, 0.4, 0.6, 1.0)
+        px = self._probe_fbo.read(components=4, alignment=1)
+        return px[:4] == bytes((51, 102, 153, 255))
+
     # ------------------------------------------------------------ resources
 
     def _mesh(self, name: str):
@@ -196,14 +242,24 @@ class Renderer:
         return self._noise[key]
 
     def _targets_for(self, w: int, h: int) -> Targets:
-        if (w, h) in self._targets:
-            self._targets.move_to_end((w, h))
-        else:
-            if len(self._targets) >= 4:  # keep a few sizes; drop the oldest
-                self._targets.popitem(last=False)[1].release()
-            out = self.ctx.framebuffer(color_attachments=[self.ctx.renderbuffer((w, h), 4)])
-            self._targets[(w, h)] = Targets((w, h), out)
-        return self._targets[(w, h)]
+        return self._targets.get((w, h), lambda: Targets(
+            (w, h), self.ctx.framebuffer(color_attachments=[self.ctx.renderbuffer((w, h), 4)])))
+
+    def trim(self, keep_targets=(), keep_gbuffers=()) -> None:
+        """Hold both GL caches to their byte budgets (after a frame, keeping its own)."""
+        self._targets.trim(keep_targets)
+        self._gbuffers.trim(keep_gbuffers)
+
+    def cache_bytes(self) -> int:
+        return self._targets.nbytes() + self._gbuffers.nbytes()
+
+    def release_caches(self) -> None:
+        """Free every cached target and scene pass (a worker over its memory budget)."""
+        self._targets.clear()
+        self._gbuffers.clear()
+        for tex in self._noise.values():
+            tex.release()
+        self._noise.clear()
 
     def _msaa_fbo(self, t: Targets) -> moderngl.Framebuffer:
         if t.msaa is None:
@@ -215,26 +271,21 @@ class Renderer:
         return t.msaa
 
     def _gbuffer(self, slot: str, w: int, h: int) -> GBuffer:
-        key = (slot, w, h)
-        if key in self._gbuffers:
-            self._gbuffers.move_to_end(key)
-            return self._gbuffers[key]
-        while len(self._gbuffers) >= MAX_GBUFFERS:
-            self._gbuffers.popitem(last=False)[1].release()
-        ctx = self.ctx
-        color = ctx.texture((w, h), 4, dtype="f2")
-        color.repeat_x = color.repeat_y = False
-        invdist = ctx.texture((w, h), 1, dtype="f4")
-        invdist.filter = (moderngl.NEAREST, moderngl.NEAREST)
-        fbo = ctx.framebuffer(color_attachments=[color, invdist],
-                              depth_attachment=ctx.depth_renderbuffer((w, h)))
-        self._gbuffers[key] = GBuffer(fbo, color, invdist)
-        return self._gbuffers[key]
+        def make() -> GBuffer:
+            ctx = self.ctx
+            color = ctx.texture((w, h), 4, dtype="f2")
+            color.repeat_x = color.repeat_y = False
+            invdist = ctx.texture((w, h), 1, dtype="f4")
+            invdist.filter = (moderngl.NEAREST, moderngl.NEAREST)
+            fbo = ctx.framebuffer(color_attachments=[color, invdist],
+                                  depth_attachment=ctx.depth_renderbuffer((w, h)))
+            return GBuffer(fbo, color, invdist)
+        return self._gbuffers.get((slot, w, h), make)
 
     def drop_slot(self, slot: str) -> None:
         """Free a slot's cached scene passes (a session ended)."""
-        for key in [k for k in self._gbuffers if k[0] == slot]:
-            self._gbuffers.pop(key).release()
+        for key in [k for k in self._gbuffers.keys() if k[0] == slot]:
+            self._gbuffers.pop(key)
 
     def _fog_target(self, t: Targets, scale: int):
         if scale not in t.fog:
@@ -313,8 +364,7 @@ class Renderer:
         g.scene_key = key
 
     def _set_fog_uniforms(self, prog, fog: FogParams, time: float) -> None:
-        ground = terrain.flat if fog.scene == "calibration" else terrain.height
-        states = {i: simulate(l, time, fog.wind.vector(), ground)
+        states = {i: self._particle_state(l, time, fog)
                   for i, l in enumerate(fog.layers) if isinstance(l, Particles) and l.enabled}
         data, parts = pack(fog, states)
         self._packed = (data, parts)
@@ -330,6 +380,20 @@ class Renderer:
         _set(prog, "uCutoffDistance", e.cutoff_distance)
         _set(prog, "uMaxOpacity", e.max_opacity)
         _set(prog, "uDensityPow", fog.density)
+
+    def _particle_state(self, layer: Particles, time: float, fog: FogParams):
+        """A particle layer's state at `time`, simulated once per distinct (layer, time,
+        wind, scene) and kept in a small LRU (rays at one time, frames of a paused look)."""
+        key = (layer.model_dump_json(), float(time), tuple(fog.wind.vector()), fog.scene)
+        cache = self._sim_cache
+        if key in cache:
+            cache.move_to_end(key)
+            return cache[key]
+        ground = terrain.flat if fog.scene == "calibration" else terrain.height
+        cache[key] = simulate(layer, time, fog.wind.vector(), ground)
+        while len(cache) > SIM_CACHE:
+            cache.popitem(last=False)
+        return cache[key]
 
     def _particle_quads(self, fog: FogParams, view: cam.View, scale: int) -> None:
         """Multiply each particle's clarity into the fog target (bound), one instanced
@@ -443,6 +507,7 @@ class Renderer:
             self.empty_vao[cp].render(moderngl.TRIANGLES, vertices=3)
 
         raw = t.out.read(components=3, alignment=1)
+        self.trim(keep_targets=[(w, h)], keep_gbuffers=[(slot, w, h)])
         return np.frombuffer(raw, np.uint8).reshape(h, w, 3)[::-1]
 
     def transmittance(self, fog: FogParams, origins, directions, lengths, times) -> np.ndarray:

@@ -32,14 +32,31 @@ class SecurityHeaders:
         await self.app(scope, receive, send_with_headers)
 
 
-def origin_allowed(origin: str | None, host: str | None, allowed: str) -> bool:
+def _origin_tuple(scheme: str, netloc: str) -> tuple[str, str, int] | None:
+    """(scheme, host, port) with the scheme's default port filled in."""
+    scheme = scheme.lower()
+    default = {"http": 80, "https": 443}.get(scheme)
+    if default is None:
+        return None
+    try:
+        parts = urlsplit(f"{scheme}://{netloc}")
+        port = parts.port or default
+    except ValueError:
+        return None
+    return scheme, (parts.hostname or "").lower(), port
+
+
+def origin_allowed(origin: str | None, host: str | None, allowed: str, scheme: str = "ws") -> bool:
     """Cross-site WebSocket hijacking guard: a browser always sends Origin; it must be
-    this server's own host or in the allow-list. Clients that send no Origin (not a
-    browser) are let through: they carry no victim's cookies."""
+    this server's own origin (scheme, host and port: a page served over https connects
+    with wss) or in the allow-list. Clients that send no Origin (not a browser) are let
+    through: they carry no victim's cookies."""
     if origin is None:
         return True
     allow = {o.strip().rstrip("/") for o in allowed.split(",") if o.strip()}
     if "*" in allow or origin.rstrip("/") in allow:
         return True
     parts = urlsplit(origin)
-    return bool(host) and parts.netloc == host
+    theirs = _origin_tuple(parts.scheme, parts.netloc)
+    ours = _origin_tuple("https" if scheme in ("wss", "https") else "http", host or "")
+    return bool(host) and theirs is not None and theirs == ours

@@ -64,6 +64,7 @@ class Session:
         self.last_full = True     # the last frame was a full-quality one
         self.playing = True
         self.speed = 1.0
+        self.stalled = -1         # the version whose frame passed its deadline
         self.fog = FogParams.model_validate(P.preset_dict("default"))
         self._base_sim = self.fog.time
         self._base_wall = now
@@ -170,7 +171,10 @@ class Session:
         return self.interacting or now - self.last_input < INPUT_SETTLE_S
 
     def wants_frame(self, now: float) -> bool:
-        """Something new to show: time runs, the look changed, or a refinement is owed."""
+        """Something new to show: time runs, the look changed, or a refinement is owed
+        (never while the look whose frame was stopped at its deadline is unchanged)."""
+        if self.stalled == self.version:
+            return False
         return self.playing or self.dirty or (not self.last_full and not self.previewing(now))
 
     def next_due(self, now: float) -> float | None:
@@ -203,6 +207,14 @@ class Session:
         return FrameJob(self.frame, self.version, still, msaa=not preview,
                         quality=min(v.quality, PREVIEW_QUALITY) if preview else v.quality,
                         full=not preview, playing=self.playing)
+
+    def pause(self, now: float) -> None:
+        """Stop the clock and make no frame until the look changes (its frame was too
+        costly: trying again would only fail again)."""
+        if self.playing:
+            self.apply(PlayMsg(type="play", playing=False), now)
+        self.stalled = self.version
+        self.dirty = False
 
     def frame_done(self, job: FrameJob, sent: bool) -> None:
         """A frame was sent (or dropped: failed, stale, or the client left)."""

@@ -18,13 +18,53 @@ class Settings(BaseSettings):
         "auto", description="'auto' and 'egl' use EGL (the GPU where there is one, else llvmpipe); "
         "'default' lets glcontext pick (GLX/WGL/CGL)")
     gl_device: int | None = Field(None, ge=0, description="EGL device index; unset picks the first")
-    render_timeout_s: float = Field(60.0, gt=0, description="how long a request waits for the renderer")
-    encode_threads: int = Field(2, ge=1, le=32, description="threads that encode images")
+    workers: int = Field(1, ge=1, le=64, description="interactive render worker processes (stream "
+                         "frames, cheap stills), each with its own GL context")
+    batch_workers: int = Field(1, ge=0, le=64, description="batch render worker processes (costly "
+                               "stills, transmittance); 0 runs everything on the interactive ones")
+    batch_nice: int = Field(10, ge=0, le=19, description="CPU niceness of batch workers")
+    render_timeout_s: float = Field(30.0, gt=0, le=3600, description="deadline of a still or "
+                                    "transmittance job; past it the worker is killed and the client gets 503")
+    frame_deadline_s: float = Field(10.0, gt=0, le=600, description="deadline of one stream frame")
+    queue_timeout_s: float = Field(30.0, gt=0, le=3600, description="longest wait for a worker "
+                                   "before a job starts; beyond, 503")
+    worker_cache_mb: int = Field(256, ge=16, le=65536, description="GL cache budget of each worker "
+                                 "(render targets and cached scene passes), MiB")
+    worker_memory_mb: int = Field(1024, ge=128, le=262144, description="resident memory above which "
+                                  "a worker frees its caches, and is replaced if still over, MiB")
+    still_budget_s: float = Field(20.0, gt=0, le=3600, description="estimated render seconds a still "
+                                  "may cost (on the reference machine, times cost_scale); beyond, 422")
+    still_memory_mb: int = Field(900, ge=16, le=262144, description="estimated GL memory a still may "
+                                 "take, MiB; beyond, 422")
+    interactive_cost_s: float = Field(0.5, ge=0, le=60, description="stills estimated below this "
+                                      "run on the interactive workers, the rest on the batch ones")
+    cost_scale: float = Field(1.0, gt=0, le=100, description="multiplies cost estimates (below 1 on "
+                              "a GPU)")
+    probe_interval_s: float = Field(1.0, gt=0, le=60, description="an idle worker is probed this often")
+    probe_deadline_s: float = Field(5.0, gt=0, le=600, description="deadline of a probe")
+    liveness_s: float = Field(10.0, gt=0, le=600, description="/healthz fails when no worker has "
+                              "rendered (a probe or a job) for this long")
+    stills_cache_mb: int = Field(64, ge=0, le=65536, description="encoded stills kept for repeats, MiB")
     max_sessions: int = Field(32, ge=1, le=10000, description="streaming sessions per process; "
                               "the next is refused with close code 1013")
     max_stills: int = Field(4, ge=1, le=256, description="still renders at once; beyond, 503")
     messages_per_s: float = Field(120.0, gt=0, description="per-socket message rate (token bucket)")
     message_burst: int = Field(240, ge=1, description="per-socket burst of messages")
+    max_sessions_per_client: int = Field(4, ge=1, le=10000, description="streaming sessions one "
+                                         "client address may hold; the next is refused with 1013")
+    idle_timeout_s: float = Field(300.0, gt=0, le=86400, description="a WebSocket that sends nothing "
+                                  "this long is closed (code 4408)")
+    ack_timeout_s: float = Field(30.0, gt=0, le=3600, description="a WebSocket that leaves frames "
+                                 "unacknowledged this long is closed (code 4408)")
+    max_body_bytes: int = Field(2 << 20, ge=1024, le=1 << 30, description="largest request body; beyond, 413")
+    max_url_bytes: int = Field(32768, ge=1024, le=1 << 20, description="longest request target "
+                               "(path and query); beyond, 414")
+    max_headers: int = Field(100, ge=8, le=10000, description="most request headers; beyond, 431")
+    max_header_bytes: int = Field(65536, ge=1024, le=1 << 20, description="largest total size of "
+                                  "the request headers; beyond, 431")
+    forwarded_allow_ips: str = Field("127.0.0.1", description="proxies whose X-Forwarded-For/-Proto "
+                                     "are trusted (comma-separated, or '*'): the client address that "
+                                     "max_sessions_per_client counts, and the scheme the Origin check uses")
     allowed_origins: str = Field("", description="comma-separated Origins allowed on /ws besides "
                                  "the server's own host; '*' allows any")
 

@@ -1,12 +1,19 @@
-"""Live frames over a WebSocket: the scheduler that shares the one render thread among
-sessions, and the /ws endpoint.
+"""Live frames over a WebSocket: the scheduler that shares the interactive render
+workers among sessions, and the /ws endpoint.
 
-The scheduler starts a frame for the next due session in round-robin order, with at most
-`max_jobs` frames on the render thread (one: a second queued frame would only add a
-frame of latency, since encoding already overlaps the next render). Each frame is a snapshot of its session (latest wins); it
-is rendered, JPEG-encoded in a thread pool (overlapping the next render) and sent as
-header + JPEG. A session never has more than MAX_IN_FLIGHT frames unacknowledged, so a
-slow client gets fewer frames, never older ones.
+Each session is pinned to one interactive worker (the one with the fewest sessions), so
+its cached scene pass stays where its frames are drawn. The scheduler starts a frame for
+the next due session in round-robin order, with at most `frames_per_worker` frames on
+each worker (one: a second queued frame would only add a frame of latency). Each frame
+is a snapshot of its session (latest wins); the worker renders and JPEG-encodes it, and
+the bytes go out as header + JPEG. A session never has more than MAX_IN_FLIGHT frames
+unacknowledged, so a slow client gets fewer frames, never older ones.
+
+A frame past its deadline kills its worker (the supervisor's rule); the session that
+asked for it is paused and told why, so one too-costly look cannot keep killing the
+worker that every other session shares. Sessions that go quiet (no message for
+`idle_timeout_s`) or stop acknowledging (`ack_timeout_s`) are closed with code 4408 and
+a reason the page shows.
 """
 
 from __future__ import annotations
@@ -20,21 +27,28 @@ from typing import Any
 
 from starlette.websockets import WebSocket, WebSocketDisconnect, WebSocketState
 
-from . import metrics
-from .encode import encode
+from . import metrics, worker
 from .protocol import (FLAG_FULL, FLAG_PLAYING, MAX_MESSAGE, PROTOCOL, ProtocolError, QueryMsg,
                        frame_header, parse)
 from .session import FrameJob, Session
+from .supervisor import DeadlineExceeded, Slot, Supervisor, WorkerError
 
 log = logging.getLogger("fogbank.stream")
 
 
+IDLE_CLOSE = 4408   # closed for inactivity (no messages, or frames left unacknowledged)
+
+
 class Client:
-    def __init__(self, session: Session, ws: WebSocket):
+    def __init__(self, session: Session, ws: WebSocket, addr: str, now: float):
         self.session = session
         self.ws = ws
+        self.addr = addr
+        self.slot: Slot | None = None
         self.send_lock = asyncio.Lock()
         self.closed = False
+        self.last_message = now
+        self.unacked_since: float | None = None   # oldest frame sent and not yet acknowledged
 
     async def send_json(self, msg: dict[str, Any]) -> None:
         async with self.send_lock:
@@ -46,50 +60,66 @@ class Client:
 
 
 class Streamer:
-    def __init__(self, render, pool, max_jobs: int = 1, clock=time.monotonic, settings=None):
+    def __init__(self, workers: Supervisor, frames_per_worker: int = 1, clock=time.monotonic, settings=None):
         from .settings import Settings
         self.settings = settings or Settings()
-        self.render = render
-        self.pool = pool
-        self.max_jobs = max_jobs
+        self.workers = workers
+        self.frames_per_worker = frames_per_worker
         self.clock = clock
         self.clients: OrderedDict[str, Client] = OrderedDict()
-        self.jobs = 0
-        self.frames_sent = 0
+        self.frames: dict[int, int] = {}   # frames being made, by interactive worker index
         self._wake = asyncio.Event()
-        self._task: asyncio.Task | None = None
+        self._tasks: list[asyncio.Task] = []
         self._rr = 0
 
     def start(self) -> None:
-        self._task = asyncio.get_running_loop().create_task(self._run(), name="fogbank-scheduler")
+        loop = asyncio.get_running_loop()
+        self._tasks = [loop.create_task(self._run(), name="fogbank-scheduler"),
+                       loop.create_task(self._watch(), name="fogbank-idle-watch")]
 
     async def stop(self) -> None:
-        if self._task:
-            self._task.cancel()
+        for task in self._tasks:
+            task.cancel()
             try:
-                await self._task
+                await task
             except asyncio.CancelledError:
                 pass
 
     def wake(self) -> None:
         self._wake.set()
 
+    def per_client(self, addr: str) -> int:
+        return sum(1 for c in self.clients.values() if c.addr == addr)
+
     def add(self, client: Client) -> None:
+        slot = self.workers.interactive.least_loaded("sessions")
+        slot.sessions += 1
+        client.slot = slot
         self.clients[client.session.id] = client
         self.wake()
 
     def remove(self, client: Client) -> None:
         client.closed = True
-        self.clients.pop(client.session.id, None)
-        sid = client.session.id
-        self.render.submit(lambda r: r.drop_slot(sid))
+        if self.clients.pop(client.session.id, None) is not None and client.slot is not None:
+            client.slot.sessions -= 1
+            asyncio.get_running_loop().create_task(self._drop(client.slot, client.session.id))
+
+    async def _drop(self, slot: Slot, sid: str) -> None:
+        """Free the session's cached scene pass on its worker."""
+        try:
+            await self.workers.call(slot, worker.drop_slot, sid, deadline=self.settings.frame_deadline_s)
+        except Exception:  # noqa: BLE001 - a dead worker has nothing left to free
+            pass
 
     def _pick(self, now: float) -> tuple[Client | None, float | None]:
-        """The next due client in round-robin order, else when the earliest one is due."""
+        """The next due client (whose worker has room) in round-robin order, else when
+        the earliest one is due."""
         clients = list(self.clients.values())
         soonest = None
         for i in range(len(clients)):
             c = clients[(self._rr + i) % len(clients)]
+            if self.frames.get(c.slot.index, 0) >= self.frames_per_worker:
+                continue   # a finished frame wakes the scheduler
             due = c.session.next_due(now)
             if due is None:
                 continue
@@ -103,12 +133,10 @@ class Streamer:
         while True:
             self._wake.clear()
             now = self.clock()
-            client, soonest = (None, None)
-            if self.jobs < self.max_jobs:
-                client, soonest = self._pick(now)
+            client, soonest = self._pick(now)
             if client is not None:
                 job = client.session.start_frame(now)
-                self.jobs += 1
+                self.frames[client.slot.index] = self.frames.get(client.slot.index, 0) + 1
                 asyncio.get_running_loop().create_task(self._produce(client, job))
                 continue
             timeout = None if soonest is None else max(0.0, soonest - now)
@@ -120,23 +148,16 @@ class Streamer:
     async def _produce(self, client: Client, job: FrameJob) -> None:
         s = client.session
         sent = False
+        slot = client.slot
         try:
-            slot = s.id
-
-            def draw(r):
-                t0 = time.perf_counter()
-                img = r.render(job.still, slot=slot, msaa=job.msaa)
-                return img, (time.perf_counter() - t0) * 1000.0
             try:
-                img, render_ms = await asyncio.wrap_future(self.render.submit(draw))
+                out = await self.workers.call(slot, worker.frame, job.still, s.id, job.msaa, job.quality,
+                                              deadline=self.settings.frame_deadline_s)
             finally:
-                self.jobs -= 1
+                self.frames[slot.index] -= 1
                 self.wake()
+            render_ms, encode_ms = out["render_ms"], out["encode_ms"]
             metrics.RENDER_MS.observe(render_ms)
-            loop = asyncio.get_running_loop()
-            t0 = time.perf_counter()
-            data = await loop.run_in_executor(self.pool, encode, img, "jpg", job.quality)
-            encode_ms = (time.perf_counter() - t0) * 1000.0
             metrics.ENCODE_MS.observe(encode_ms)
             flags = (FLAG_FULL if job.full else 0) | (FLAG_PLAYING if job.playing else 0)
             header = frame_header(job.frame, job.version, job.still.time, render_ms, encode_ms,
@@ -146,52 +167,106 @@ class Streamer:
             # encodes differ): this one is stale, drop it rather than show the past
             if not client.closed and job.frame > s.sent:
                 s.sent = job.frame
-                await client.send_bytes(header + data)
+                await client.send_bytes(header + out["data"])
+                if client.unacked_since is None:
+                    client.unacked_since = self.clock()
                 sent = True
-                self.frames_sent += 1
                 metrics.FRAMES.inc()
+        except DeadlineExceeded as exc:
+            metrics.ERRORS.labels("frame_deadline").inc()
+            log.warning("frame past its deadline; session paused", extra={"session": s.id, "frame": job.frame})
+            s.pause(self.clock())
+            await self._tell(client, s.state(self.clock()))
+            await self._tell(client, {"type": "error", "loc": ["params"], "retry_after": exc.retry_after,
+                                      "msg": f"this look took over {self.settings.frame_deadline_s:g} s a frame, "
+                                             "so the stream is paused: make it cheaper (fewer or cheaper layers, "
+                                             "fewer volume samples, a larger effects.fog_scale or a smaller view)"})
         except Exception as exc:  # noqa: BLE001 - one frame fails, the session goes on
-            if not client.closed:
-                metrics.ERRORS.labels("frame").inc()
-                log.warning("frame failed", extra={"session": s.id, "frame": job.frame, "error": str(exc)})
-                try:
-                    await client.send_json({"type": "error", "msg": f"frame {job.frame} failed: {exc}"})
-                except Exception:  # noqa: BLE001
-                    pass
+            metrics.ERRORS.labels("frame").inc()
+            log.warning("frame failed", extra={"session": s.id, "frame": job.frame, "error": str(exc)})
+            msg = str(exc) if isinstance(exc, WorkerError) else f"{type(exc).__name__}: {exc}"
+            await self._tell(client, {"type": "error", "msg": f"frame {job.frame} failed: {msg}"})
         finally:
             s.frame_done(job, sent)
             self.wake()
 
+    async def _tell(self, client: Client, msg: dict[str, Any]) -> None:
+        if client.closed:
+            return
+        try:
+            await client.send_json(msg)
+        except Exception:  # noqa: BLE001 - the client is gone
+            pass
+
+    async def _watch(self) -> None:
+        """Close sessions that went quiet or stopped acknowledging frames."""
+        cfg = self.settings
+        while True:
+            await asyncio.sleep(min(1.0, cfg.idle_timeout_s / 4, cfg.ack_timeout_s / 4))
+            now = self.clock()
+            for c in list(self.clients.values()):
+                reason = None
+                if now - c.last_message > cfg.idle_timeout_s:
+                    reason = f"idle: no message for {cfg.idle_timeout_s:g} s"
+                elif c.unacked_since is not None and now - c.unacked_since > cfg.ack_timeout_s:
+                    reason = f"frames unacknowledged for {cfg.ack_timeout_s:g} s"
+                if reason:
+                    metrics.ERRORS.labels("idle").inc()
+                    log.info("session closed", extra={"session": c.session.id, "reason": reason})
+                    self.remove(c)
+                    try:
+                        await c.ws.close(code=IDLE_CLOSE, reason=reason)
+                    except Exception:  # noqa: BLE001 - already gone
+                        pass
+
 
 class TokenBucket:
-    """At most `rate` messages a second on average, `burst` at once."""
+    """At most `rate` messages a second on average, `burst` at once. `should_notify`
+    says whether a dropped message is the first since the bucket last had room: the
+    client is told once per window of overflow, then messages drop silently."""
 
     def __init__(self, rate: float, burst: int, now: float):
         self.rate, self.burst, self.tokens, self.t = rate, burst, float(burst), now
+        self._notified = False
 
     def take(self, now: float) -> bool:
         self.tokens = min(self.burst, self.tokens + (now - self.t) * self.rate)
         self.t = now
         if self.tokens >= 1.0:
             self.tokens -= 1.0
+            if self.tokens >= self.burst / 2:   # the overflow is over: a new one is told again
+                self._notified = False
             return True
         return False
+
+    def should_notify(self) -> bool:
+        if self._notified:
+            return False
+        self._notified = True
+        return True
 
 
 async def websocket_endpoint(ws: WebSocket, streamer: Streamer, renderer_info: dict) -> None:
     """/ws?<look query>: one session. See protocol.py for the messages."""
     cfg = streamer.settings
     await ws.accept()
+    addr = ws.client.host if ws.client else "?"
+    refusal = None
     if len(streamer.clients) >= cfg.max_sessions:
         metrics.ERRORS.labels("sessions_full").inc()
-        await ws.send_json({"type": "error", "msg": f"the server is full ({cfg.max_sessions} sessions); "
-                            "retry in a few seconds", "retry_after": 5})
+        refusal = f"the server is full ({cfg.max_sessions} sessions); retry in a few seconds"
+    elif streamer.per_client(addr) >= cfg.max_sessions_per_client:
+        metrics.ERRORS.labels("sessions_per_client").inc()
+        refusal = (f"this address already has {cfg.max_sessions_per_client} sessions open; close one "
+                   "(another tab or window) or retry later")
+    if refusal:
+        await ws.send_json({"type": "error", "msg": refusal, "retry_after": 5})
         await ws.close(code=1013, reason="try again later")
         return
     now = streamer.clock()
     bucket = TokenBucket(cfg.messages_per_s, cfg.message_burst, now)
     session = Session(uuid.uuid4().hex[:12], now)
-    client = Client(session, ws)
+    client = Client(session, ws, addr, now)
     query = ws.url.query
     initial = session.apply(QueryMsg(type="query", query=query), now) if query else [session.state(now)]
     await client.send_json({"type": "hello", "protocol": PROTOCOL, "session": session.id,
@@ -213,18 +288,23 @@ async def websocket_endpoint(ws: WebSocket, streamer: Streamer, renderer_info: d
             if size > MAX_MESSAGE:
                 await ws.close(code=1009, reason=f"message over {MAX_MESSAGE} bytes")
                 break
+            client.last_message = streamer.clock()
             if not bucket.take(streamer.clock()):
                 metrics.ERRORS.labels("rate").inc()
-                await client.send_json({"type": "error", "msg": f"over {cfg.messages_per_s:g} messages/s: "
-                                        "message dropped", "loc": ["message"]})
+                if bucket.should_notify():
+                    await client.send_json({"type": "error", "msg": f"over {cfg.messages_per_s:g} messages/s: "
+                                            "messages are dropped until the rate falls", "loc": ["message"]})
                 continue
             try:
                 parsed = parse(data)
             except ProtocolError as exc:
                 await client.send_json({"type": "error", "detail": exc.errors, "msg": str(exc)})
                 continue
+            acked = session.acked
             for out in session.apply(parsed, streamer.clock()):
                 await client.send_json(out)
+            if session.acked != acked:   # progress: the oldest unacknowledged frame is newer
+                client.unacked_since = None if session.acked >= session.sent else streamer.clock()
             streamer.wake()
     except WebSocketDisconnect:
         pass

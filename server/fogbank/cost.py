@@ -1,0 +1,100 @@
+"""What a look costs to render, estimated before rendering: seconds and GL memory.
+
+The coefficients are seconds measured on the reference machine (2 CPU cores, Mesa
+llvmpipe) at full fog resolution; `cost_scale` (a setting) scales them for faster
+hardware. They are conservative fits of `fogbank`'s own renders (see
+tests/gl/test_cost.py, which holds the estimate to within a factor of the measured time
+for every kind): the point is to refuse a look that would hold a worker for minutes, and
+to route cheap stills to the interactive worker, not to predict milliseconds.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from .params import Cosine, FogParams, Noise, Particles, StillParams
+from .renderer import GBUFFER_BPP, LINEAR_BPP, MSAA_BPP, OUT_BPP
+
+# seconds on the reference machine
+SCENE_FIXED_S = 0.10          # shadow map check, terrain vertex work, programs
+SCENE_S_PER_MPX = 0.25        # the scene pass with 4x MSAA, per megapixel
+SCENE_PREVIEW_S_PER_MPX = 0.12
+COMPOSITE_S_PER_MPX = 0.05
+BLUR_S_PER_MPX = 0.20
+ENCODE_S_PER_MPX = {"jpg": 0.01, "png": 0.04, "webp": 0.08}
+# fog pass, per layer, per megapixel of fog target
+LAYER_S_PER_MPX = {"homogeneous": 0.03, "height": 0.03, "cosine": 0.02, "polynomial": 0.04,
+                   "potential": 0.04, "sphere": 0.04, "distance": 0.05, "noise": 0.05,
+                   "particles": 0.0}
+COSINE_TERM_S_PER_MPX = 0.01
+NOISE_SAMPLE_S_PER_MPX = 0.022   # volume mode, per sample along the ray
+PARTICLE_S_PER_MPX = 0.0011      # one particle quad of radius 20 m, per megapixel
+PARTICLE_SIM_S = 0.5             # simulating 1024 particles of life 128 steps, once per time
+
+
+@dataclass
+class Cost:
+    seconds: float
+    memory: int                         # bytes of GL targets and images
+    parts: dict[str, float] = field(default_factory=dict)   # seconds by contributor
+
+    def biggest(self, n: int = 3) -> list[str]:
+        return [k for k, v in sorted(self.parts.items(), key=lambda kv: -kv[1])[:n] if v > 0]
+
+
+def _layer_seconds(layer, fog_mpx: float) -> float:
+    s = LAYER_S_PER_MPX[layer.kind] * fog_mpx
+    if isinstance(layer, Cosine):
+        s += COSINE_TERM_S_PER_MPX * len(layer.terms) * fog_mpx
+    elif isinstance(layer, Noise) and layer.mode == "volume":
+        s += NOISE_SAMPLE_S_PER_MPX * layer.samples * fog_mpx
+    elif isinstance(layer, Particles):
+        cover = min(max((layer.radius / 20.0) ** 2, 0.05), 16.0)
+        s += PARTICLE_S_PER_MPX * layer.count * cover * fog_mpx + particle_sim_seconds(layer)
+    return s
+
+
+def particle_sim_seconds(layer: Particles) -> float:
+    return PARTICLE_SIM_S * layer.count / 1024 * layer.life_max / 128
+
+
+def estimate(still: StillParams, msaa: bool = True, fmt: str = "jpg", scale: float = 1.0) -> Cost:
+    """Seconds and memory to render and encode `still` (`scale` multiplies seconds)."""
+    px = still.width * still.height
+    mpx = px / 1e6
+    e = still.effects
+    fog_mpx = mpx / (e.fog_scale ** 2)
+    parts: dict[str, float] = {
+        "width*height (scene pass)": SCENE_FIXED_S + (SCENE_S_PER_MPX if msaa else SCENE_PREVIEW_S_PER_MPX) * mpx,
+        "width*height (composite, encode)": (COMPOSITE_S_PER_MPX + ENCODE_S_PER_MPX.get(fmt, 0.08)) * mpx,
+    }
+    if e.blur != "off":
+        parts["effects.blur"] = BLUR_S_PER_MPX * mpx
+    for i, layer in enumerate(still.layers):
+        if layer.enabled:
+            parts[f"layers[{i}] ({_describe(layer)})"] = _layer_seconds(layer, fog_mpx)
+    memory = px * (OUT_BPP + GBUFFER_BPP + 3 + 4) + int(fog_mpx * 1e6) * 8
+    if msaa:
+        memory += px * MSAA_BPP
+    if e.blur == "separate":
+        memory += px * LINEAR_BPP
+    seconds = sum(parts.values()) * scale
+    return Cost(seconds, memory, {k: v * scale for k, v in parts.items()})
+
+
+def _describe(layer) -> str:
+    if isinstance(layer, Noise) and layer.mode == "volume":
+        return f"noise, volume, {layer.samples} samples"
+    if isinstance(layer, Particles):
+        return f"particles, {layer.count} of radius {layer.radius:g} m"
+    if isinstance(layer, Cosine):
+        return f"cosine, {len(layer.terms)} terms"
+    return layer.kind
+
+
+def transmittance_seconds(fog: FogParams, rays: int, distinct_times: int, scale: float = 1.0) -> Cost:
+    """Rays cost little; each distinct time simulates every particle layer once."""
+    sim = sum(particle_sim_seconds(l) for l in fog.layers if isinstance(l, Particles) and l.enabled)
+    parts = {"rays": 2e-6 * rays * max(1, len(fog.layers)),
+             "distinct ray times x particle simulation": distinct_times * sim}
+    return Cost(sum(parts.values()) * scale, rays * 48, {k: v * scale for k, v in parts.items()})

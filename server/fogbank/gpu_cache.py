@@ -1,0 +1,65 @@
+"""A least-recently-used cache of GL resources bounded in bytes, not in count.
+
+Entries report their size with `nbytes()` and free themselves (attachments included)
+with `release()`. Entries can grow after they are stored (render targets are allocated
+lazily), so the budget is enforced by `trim()`, which the renderer calls after each
+frame with the keys that frame used: those are never evicted, so one frame larger than
+the whole budget still renders, and is released by the next trim.
+"""
+
+from __future__ import annotations
+
+from collections import OrderedDict
+from typing import Any, Callable, Hashable, Iterable
+
+
+class ByteLRU:
+    def __init__(self, budget: int):
+        self.budget = int(budget)
+        self._items: OrderedDict[Hashable, Any] = OrderedDict()
+
+    def get(self, key: Hashable, make: Callable[[], Any]) -> Any:
+        """The entry for `key`, made with `make()` if missing; marks it most recent."""
+        if key in self._items:
+            self._items.move_to_end(key)
+        else:
+            self._items[key] = make()
+        return self._items[key]
+
+    def nbytes(self) -> int:
+        return sum(v.nbytes() for v in self._items.values())
+
+    def __len__(self) -> int:
+        return len(self._items)
+
+    def __contains__(self, key: Hashable) -> bool:
+        return key in self._items
+
+    def keys(self) -> list:
+        return list(self._items)
+
+    def pop(self, key: Hashable) -> None:
+        item = self._items.pop(key, None)
+        if item is not None:
+            item.release()
+
+    def trim(self, keep: Iterable[Hashable] = ()) -> int:
+        """Release least recently used entries (other than `keep`) until the total is
+        within the budget; returns the bytes released."""
+        keep = set(keep)
+        total = self.nbytes()
+        freed = 0
+        for key in list(self._items):
+            if total <= self.budget:
+                break
+            if key in keep:
+                continue
+            n = self._items[key].nbytes()
+            self._items.pop(key).release()
+            total -= n
+            freed += n
+        return freed
+
+    def clear(self) -> None:
+        for key in list(self._items):
+            self._items.pop(key).release()

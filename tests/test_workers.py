@@ -1,0 +1,137 @@
+"""Render workers under supervision (real worker processes, real GL): deadlines kill and
+replace the worker, a killed or broken worker is replaced, memory over budget recycles,
+liveness follows probes."""
+
+from __future__ import annotations
+
+import asyncio
+import os
+import signal
+import time
+
+import faults
+import pytest
+
+from fogbank import metrics, worker
+from fogbank.settings import Settings
+from fogbank.supervisor import DeadlineExceeded, QueueTimeout, Supervisor, WorkerError
+
+
+def run(coro_fn, settings: Settings):
+    """Start a supervisor, run `coro_fn(sup)`, stop it."""
+    async def main():
+        sup = Supervisor(settings)
+        await sup.start()
+        try:
+            return await coro_fn(sup)
+        finally:
+            await sup.stop()
+    return asyncio.run(main())
+
+
+def alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    try:   # a zombie is dead too
+        return open(f"/proc/{pid}/stat").read().split()[2] != "Z"
+    except OSError:
+        return False
+
+
+def test_a_job_past_its_deadline_kills_the_worker_and_others_go_on():
+    async def body(sup: Supervisor):
+        slot = sup.interactive.slots[0]
+        old = slot.pid
+        kills = metrics.DEADLINE_KILLS.labels("interactive")._value.get()
+        t0 = time.monotonic()
+        with pytest.raises(DeadlineExceeded):
+            await sup.call(slot, worker.sleep, 30.0, deadline=0.5)
+        took = time.monotonic() - t0
+        assert took < 5.0                                   # not the job's 30 s
+        out = await sup.call(slot, worker.probe, deadline=30)
+        assert out["ok"] is True
+        assert out["pid"] != old                            # a fresh process
+        assert not alive(old)
+        assert metrics.DEADLINE_KILLS.labels("interactive")._value.get() == kills + 1
+        # the batch worker was never touched
+        assert (await sup.call(sup.batch.slots[0], worker.probe, deadline=30))["ok"] is True
+    run(body, Settings())
+
+
+def test_a_job_that_waits_too_long_is_abandoned():
+    async def body(sup: Supervisor):
+        slot = sup.interactive.slots[0]
+        busy = asyncio.ensure_future(sup.call(slot, worker.sleep, 3.0, deadline=30))
+        await asyncio.sleep(0.3)
+        t0 = time.monotonic()
+        with pytest.raises(QueueTimeout):
+            await sup.call(slot, worker.probe, deadline=0.2, queue_s=0.2)
+        assert time.monotonic() - t0 < 1.5
+        await busy
+        assert (await sup.call(slot, worker.probe, deadline=30))["ok"] is True
+    run(body, Settings())
+
+
+def test_a_worker_killed_while_idle_is_replaced():
+    async def body(sup: Supervisor):
+        slot = sup.interactive.slots[0]
+        old = slot.pid
+        os.kill(old, signal.SIGKILL)
+        await asyncio.sleep(0.5)
+        deadline = time.monotonic() + 20
+        while True:   # the first call may report the loss; a later one succeeds
+            try:
+                out = await sup.call(slot, worker.probe, deadline=30)
+                break
+            except WorkerError:
+                assert time.monotonic() < deadline
+                await asyncio.sleep(0.2)
+        assert out["ok"] is True and out["pid"] != old
+    run(body, Settings())
+
+
+def test_a_worker_over_its_memory_budget_is_recycled_between_jobs():
+    async def body(sup: Supervisor):
+        slot = sup.interactive.slots[0]
+        old = slot.pid
+        out = await sup.call(slot, faults.allocate, 400, deadline=30)
+        assert out["recycle"] is True and out["rss"] > 300 << 20
+        fresh = await sup.call(slot, worker.probe, deadline=30)
+        assert fresh["pid"] != old and fresh["rss"] < 300 << 20
+        for _ in range(100):
+            if not alive(old):
+                break
+            await asyncio.sleep(0.1)
+        assert not alive(old)                                # the old one exited
+    run(body, Settings(worker_memory_mb=300))
+
+
+def test_liveness_fails_while_no_worker_answers_and_recovers():
+    async def body(sup: Supervisor):
+        assert sup.live()[0] is True
+        pids = [s.pid for s in sup.slots()]
+        for pid in pids:
+            os.kill(pid, signal.SIGSTOP)      # hung: alive, but rendering nothing
+        try:
+            await asyncio.sleep(2.5)
+            assert sup.live()[0] is False
+        finally:
+            for pid in pids:
+                os.kill(pid, signal.SIGCONT)
+        await asyncio.sleep(2.0)
+        assert sup.live()[0] is True
+    run(body, Settings(liveness_s=1.5, probe_interval_s=0.2, probe_deadline_s=60))
+
+
+def test_a_stuck_worker_is_replaced_when_its_probes_never_start():
+    async def body(sup: Supervisor):
+        slot = sup.interactive.slots[0]
+        old = slot.pid
+        os.kill(old, signal.SIGSTOP)
+        await asyncio.sleep(5.0)       # nothing starts for 1.5 s: the stuck worker is replaced
+        out = await sup.call(slot, worker.probe, deadline=30)
+        assert out["pid"] != old
+        assert sup.live()[0] is True
+    run(body, Settings(probe_interval_s=0.2, probe_deadline_s=0.5, liveness_s=1.0))
