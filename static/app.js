@@ -113,6 +113,17 @@ stream.addEventListener("frame", (e) => {
 stream.addEventListener("reconnecting", () => banner("Connection lost — reconnecting…"));
 stream.addEventListener("close", (e) => {
   if (e.detail.code === 1009) banner("Disconnected: a message was too large.");
+  if (e.detail.code === 4408) {   // the server closed a quiet session: resume on the next input
+    banner(`Paused by the server (${e.detail.reason || "idle"}). Click or press a key to resume.`);
+    const resume = () => {
+      removeEventListener("pointerdown", resume, true);
+      removeEventListener("keydown", resume, true);
+      banner("Reconnecting…");
+      stream.connect();
+    };
+    addEventListener("pointerdown", resume, true);
+    addEventListener("keydown", resume, true);
+  }
 });
 stream.addEventListener("open", () => { banner(null); redrawNext = true; sendView(); });
 

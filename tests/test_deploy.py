@@ -176,3 +176,93 @@ def test_sigterm_drains():
     opened = [e for e in logs if e["msg"] == "session opened"]
     assert opened and len(opened[0]["session"]) == 12                          # with the session id
     assert not [e for e in logs if e["level"] == "error"]
+
+
+def _post(url: str, body: dict, timeout: float = 120):
+    import urllib.error
+    req = urllib.request.Request(url + "/api/still?format=png", data=json.dumps(body).encode(),
+                                 headers={"Content-Type": "application/json"})
+    try:
+        with urllib.request.urlopen(req, timeout=timeout) as r:
+            return r.status, r.headers, r.read()
+    except urllib.error.HTTPError as e:
+        return e.code, e.headers, e.read()
+
+
+def _metric(server: Server, name: str) -> float:
+    with urllib.request.urlopen(server.url + "/metrics", timeout=5) as r:
+        return sum(float(line.split()[-1]) for line in r.read().decode().splitlines()
+                   if line.startswith(name + "{") or line.startswith(name + " "))
+
+
+HEAVY = {"width": 1920, "height": 1080, "layers": [{"kind": "noise", "mode": "volume", "samples": 128}]}
+
+
+def test_timed_out_and_busy_renders_are_not_replayed_nor_mark_replicas_down():
+    """A render stopped at its deadline was replayed on every replica (ups=503, 503); a
+    burst of 12 heavy stills marked both replicas down and /healthz got 502 for 5.6 s."""
+    replicas = [Server(env={"FOGBANK_RENDER_TIMEOUT_S": "1.5", "FOGBANK_MAX_STILLS": "2"}).start()
+                for _ in range(2)]
+    lb = Nginx([r.port for r in replicas]).start()
+    try:
+        status, headers, body = _post(lb.url, HEAVY)
+        assert status == 503 and headers["Retry-After"] == "5"
+        assert "took over 1.5 s" in json.loads(body)["detail"]
+        assert sum(_metric(r, "fogbank_deadline_kills_total") for r in replicas) == 1   # not replayed
+        results, health = [], []
+        threads = [threading.Thread(target=lambda i=i: results.append(
+            _post(lb.url, {**HEAVY, "time": float(i)})[:3:2])) for i in range(12)]
+        for t in threads:
+            t.start()
+        t_end = time.monotonic() + 6
+        while time.monotonic() < t_end:
+            try:
+                with urllib.request.urlopen(lb.url + "/healthz", timeout=5) as r:
+                    health.append(r.status)
+            except urllib.error.HTTPError as e:
+                health.append(e.code)
+            time.sleep(0.2)
+        for t in threads:
+            t.join(120)
+        assert health and all(h == 200 for h in health)
+        assert len(results) == 12
+        for status, body in results:
+            assert status == 503
+            assert json.loads(body)["detail"]              # JSON from a replica, not nginx's HTML
+    finally:
+        lb.stop()
+        for r in replicas:
+            r.stop()
+
+
+def test_a_still_whose_replica_dies_is_served_by_another():
+    """A POST still in flight when its replica died got nginx's HTML 502."""
+    replicas = [Server().start(), Server().start()]
+    lb = Nginx([r.port for r in replicas]).start()
+    try:
+        body = {"width": 1280, "height": 720, "time": 7.0,
+                "layers": [{"kind": "noise", "mode": "volume", "samples": 128}]}
+        out = {}
+        t = threading.Thread(target=lambda: out.update(r=_post(lb.url, body)))
+        t.start()
+        busy = []
+        deadline = time.monotonic() + 10
+        while not busy and time.monotonic() < deadline:
+            for r in replicas:   # /readyz counts the stills a replica is rendering
+                with urllib.request.urlopen(r.url + "/readyz", timeout=5) as resp:
+                    if json.loads(resp.read())["stills"] >= 1:
+                        busy.append(r)
+            time.sleep(0.05)
+        assert len(busy) == 1
+        busy[0].stop(signal.SIGKILL)
+        t.join(120)
+        status, headers, png = out["r"]
+        if status == 200:                                  # replayed on the other replica
+            assert png[:8] == b"\x89PNG\r\n\x1a\n"
+        else:                                              # or a JSON 503 to retry
+            assert status == 503 and headers["Retry-After"] and json.loads(png)["detail"]
+        assert status == 200
+    finally:
+        lb.stop()
+        for r in replicas:
+            r.stop(signal.SIGKILL)

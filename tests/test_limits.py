@@ -143,3 +143,82 @@ def test_concurrent_stills_beyond_the_cap_get_503():
     finally:
         proc.terminate()
         proc.wait(30)
+
+
+def test_one_client_address_holds_at_most_its_share_of_sessions():
+    """32 idle sockets from one client locked everyone out; now one address gets
+    max_sessions_per_client and the next is refused with 1013, naming why."""
+    with TestClient(create_app(Settings(max_sessions_per_client=2))) as c:
+        with c.websocket_connect("/ws") as a, c.websocket_connect("/ws") as b:
+            a.receive_json(), b.receive_json()
+            with c.websocket_connect("/ws") as third:
+                msg = third.receive_json()
+                assert msg["type"] == "error" and "2 sessions" in msg["msg"]
+                m = third.receive()
+                assert m["type"] == "websocket.close" and m["code"] == 1013
+
+
+def test_quiet_and_unacknowledging_sockets_are_closed_with_a_reason():
+    with TestClient(create_app(Settings(idle_timeout_s=1.0, ack_timeout_s=60))) as c:
+        with c.websocket_connect("/ws?play=0") as ws:
+            ws.receive_json(), ws.receive_json()
+            while True:
+                m = ws.receive()
+                if m["type"] == "websocket.close":
+                    break
+            assert m["code"] == 4408 and "idle" in m["reason"]
+    with TestClient(create_app(Settings(idle_timeout_s=600, ack_timeout_s=1.0))) as c:
+        with c.websocket_connect("/ws") as ws:
+            ws.receive_json(), ws.receive_json()
+            ws.send_json({"type": "view", "width": 32, "height": 32})
+            t0 = time.monotonic()
+            while True:                       # frames arrive; none is acknowledged
+                m = ws.receive()
+                if m["type"] == "websocket.close":
+                    break
+            assert m["code"] == 4408 and "unacknowledged" in m["reason"]
+            assert time.monotonic() - t0 < 10
+
+
+@pytest.mark.parametrize("origin,host,scheme,ok", [
+    ("http://fog.example", "fog.example", "ws", True),
+    ("http://fog.example:80", "fog.example", "ws", True),
+    ("https://fog.example", "fog.example", "ws", False),      # the scheme counts
+    ("http://fog.example", "fog.example", "wss", False),
+    ("https://fog.example", "fog.example", "wss", True),
+    ("https://fog.example:443", "fog.example:443", "wss", True),
+    ("http://fog.example:8000", "fog.example:8001", "ws", False),
+    ("http://evil.example", "fog.example", "ws", False),
+    ("null", "fog.example", "ws", False),
+])
+def test_origin_is_compared_by_scheme_host_and_port(origin, host, scheme, ok):
+    from fogbank.security import origin_allowed
+    assert origin_allowed(origin, host, "", scheme) is ok
+
+
+def test_a_still_beyond_the_cost_budget_is_a_422_naming_what_to_reduce(client):
+    body = {"width": 1920, "height": 1080,
+            "layers": [{"kind": "noise", "mode": "volume", "samples": 128} for _ in range(16)]}
+    r = client.post("/api/still", json=body)
+    assert r.status_code == 422
+    e = r.json()["detail"][0]
+    assert e["type"] == "cost" and e["loc"] == ["body"]
+    assert "layers[0] (noise, volume, 128 samples)" in e["msg"] and "fog_scale" in e["msg"]
+    r = client.get("/api/still.png?width=4000&height=3000")
+    assert r.status_code == 422
+    assert r.json()["detail"][0]["loc"] == ["query", "width"] and "MiB" in r.json()["detail"][0]["msg"]
+
+
+def test_transmittance_is_bounded(client):
+    ray = {"origin": [0, 5, 0], "direction": [1, 0, 0], "length": 100}
+    r = client.post("/api/transmittance", json={"rays": [dict(ray, time=float(t)) for t in range(17)]})
+    assert r.status_code == 422 and "17 distinct ray times" in r.json()["detail"][0]["msg"]
+    heavy = {"layers": [{"kind": "particles", "count": 64, "life_min": 900, "life_max": 1000, "seed": i}
+                        for i in range(16)]}
+    r = client.post("/api/transmittance", json={"params": heavy,
+                                                "rays": [dict(ray, time=float(t)) for t in range(16)]})
+    assert r.status_code == 422
+    assert r.json()["detail"][0]["type"] == "cost" and "distinct times" in r.json()["detail"][0]["msg"]
+    ok = {"layers": [{"kind": "particles", "count": 256}]}
+    r = client.post("/api/transmittance", json={"params": ok, "rays": [dict(ray, time=float(t)) for t in range(16)]})
+    assert r.status_code == 200 and len(r.json()["transmittance"]) == 16

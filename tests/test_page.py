@@ -203,3 +203,20 @@ def test_controls_are_keyboard_reachable_and_labelled(server, browser):
         page.keyboard.press("Tab")
     assert page.evaluate("document.activeElement.tagName") in ("BUTTON", "SELECT", "INPUT")
     page.context.close()
+
+
+def test_a_quiet_page_is_closed_by_the_server_says_why_and_resumes_on_input(browser):
+    srv = Server(env={"FOGBANK_IDLE_TIMEOUT_S": "2"}).start()
+    try:
+        page = new_page(browser, srv.url + "/?v=1&play=0&time=3")
+        wait_frames(page, 1)
+        page.wait_for_selector("#banner:not([hidden])", timeout=15000)
+        text = page.inner_text("#banner")
+        assert "idle" in text and "resume" in text
+        frames = int(page.locator("#view").get_attribute("data-frames"))
+        page.mouse.click(640, 360)
+        wait_frames(page, frames + 1)
+        assert page.locator("#banner").is_hidden()
+        page.context.close()
+    finally:
+        srv.stop()

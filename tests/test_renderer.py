@@ -187,3 +187,40 @@ def test_preview_reuses_a_full_quality_scene_pass(renderer):
     moved = still.model_copy(update={"camera": still.camera.model_copy(update={"yaw": 9.0})})
     renderer.render(moved, slot="preview-test", msaa=False)
     assert g.scene_key[-1] is False                 # a new view: the cheap pass
+
+
+def test_render_targets_are_released_with_their_attachments_and_held_to_budget(renderer):
+    """Stills at 24 sizes: the caches stay within their byte budget and memory returns
+    (releasing framebuffers without their renderbuffers and textures grew RSS by the
+    whole target set per size: 20 stills at 1280..1299 x 720 took 164 MB to 1.84 GB)."""
+    from fogbank import worker
+    from fogbank.renderer import Renderer
+    worker._fix_mmap_threshold()
+    r = Renderer(renderer.ctx, cache_bytes=96 << 20)
+    r.render(StillParams(width=1280, height=720))
+    warm = worker.rss_bytes()
+    for w in range(1281, 1305):
+        r.render(StillParams(width=w, height=720))
+        assert r.ctx.error == "GL_NO_ERROR"
+        assert r.cache_bytes() <= 2 * (96 << 20)
+    grown = worker.rss_bytes() - warm
+    r.release_caches()
+    assert r.ctx.error == "GL_NO_ERROR"
+    assert grown < 300 << 20, grown
+
+
+def test_growing_ray_targets_and_dropping_caches_leave_no_gl_error(renderer):
+    """Releasing the bound framebuffer left GL_INVALID_OPERATION behind: 100 rays then
+    16384 rays failed with a 500."""
+    import numpy as np
+    from fogbank.params import FogParams
+    fog = FogParams()
+    for n in (1, 100, 16384):
+        O, W = np.zeros((n, 3)), np.tile([1.0, 0.0, 0.0], (n, 1))
+        T = renderer.transmittance(fog, O, W, np.full(n, 10.0), np.zeros(n))
+        assert renderer.ctx.error == "GL_NO_ERROR"
+        assert T.shape == (n,)
+    renderer.render(StillParams(width=64, height=48), slot="s1")
+    renderer.drop_slot("s1")
+    renderer.release_caches()
+    assert renderer.ctx.error == "GL_NO_ERROR"

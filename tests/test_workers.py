@@ -8,6 +8,7 @@ import asyncio
 import os
 import signal
 import time
+from concurrent.futures import ThreadPoolExecutor
 
 import faults
 import pytest
@@ -18,7 +19,8 @@ from fogbank.supervisor import DeadlineExceeded, QueueTimeout, Supervisor, Worke
 
 
 def run(coro_fn, settings: Settings):
-    """Start a supervisor, run `coro_fn(sup)`, stop it."""
+    """Start a supervisor, run `coro_fn(sup)`, stop it: on a thread of its own, since
+    other tests (Playwright's sync API) may leave an event loop on this one."""
     async def main():
         sup = Supervisor(settings)
         await sup.start()
@@ -26,7 +28,8 @@ def run(coro_fn, settings: Settings):
             return await coro_fn(sup)
         finally:
             await sup.stop()
-    return asyncio.run(main())
+    with ThreadPoolExecutor(1) as pool:
+        return pool.submit(asyncio.run, main()).result()
 
 
 def alive(pid: int) -> bool:
@@ -134,4 +137,4 @@ def test_a_stuck_worker_is_replaced_when_its_probes_never_start():
         out = await sup.call(slot, worker.probe, deadline=30)
         assert out["pid"] != old
         assert sup.live()[0] is True
-    run(body, Settings(probe_interval_s=0.2, probe_deadline_s=0.5, liveness_s=1.0))
+    run(body, Settings(probe_interval_s=0.2, probe_deadline_s=0.5, liveness_s=1.0, worker_start_s=1.0))

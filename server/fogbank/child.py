@@ -11,6 +11,8 @@ import time
 import urllib.request
 from pathlib import Path
 
+from . import proctree
+
 
 class ChildServer:
     def __init__(self, timeout: float = 60.0):
@@ -32,10 +34,8 @@ class ChildServer:
         raise RuntimeError(f"the server did not start; its log: {self.log.name}")
 
     def rss_mb(self) -> float:
-        for line in Path(f"/proc/{self.proc.pid}/status").read_text().splitlines():
-            if line.startswith("VmRSS"):
-                return int(line.split()[1]) / 1024
-        return 0.0
+        """Resident memory of the server and its render workers, MB."""
+        return proctree.tree_rss_bytes(self.proc.pid) / 2**20
 
     def log_text(self) -> str:
         return Path(self.log.name).read_text(errors="replace")

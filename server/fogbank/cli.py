@@ -134,7 +134,7 @@ def cmd_soak(args) -> None:
     from .child import ChildServer
     srv = ChildServer()
     try:
-        res = soak.run(srv.url, srv.rss_mb, args.clients, args.seconds, srv.log_text)
+        res = soak.run(srv.url, srv.rss_mb, args.clients, args.seconds, srv.log_text, churn=args.churn)
     finally:
         srv.stop()
     print(soak.report(res))
@@ -171,6 +171,7 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--clients", type=int, default=8)
     p.add_argument("--seconds", type=float, default=600.0)
     p.add_argument("--out", help="write the results as JSON here")
+    p.add_argument("--churn", action="store_true", help="each client changes look and view size every second")
     p.set_defaults(fn=cmd_soak)
     p = sub.add_parser("bench-stream", help="delivered fps and control latency over /ws")
     p.add_argument("--url", help="a running server (default: start one on a free port)")

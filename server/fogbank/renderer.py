@@ -30,7 +30,7 @@ MSAA_SAMPLES = 4
 SHADOW_SIZE = 2048
 RAYS_PER_ROW = 1024
 SIM_CACHE = 64            # particle states kept (at most 16 layers x 1024 particles each)
-CACHE_BYTES = 256 << 20   # default byte budget of each GL cache (targets, scene passes)
+CACHE_BYTES = 256 << 20   # default byte budget of the GL caches (targets and scene passes)
 TEX = {"uColor": 0, "uInvDist": 1, "uFog": 2, "uParticles": 3, "uNoise": 4, "uShadow": 5,
        "uRays": 6, "uImage": 0}
 
@@ -137,12 +137,14 @@ class Renderer:
         self.shadow_fbo = ctx.framebuffer(depth_attachment=self.shadow_tex)
         self.shadow_key: object = None
         self._meshes: dict[str, tuple] = {}
-        self._targets = ByteLRU(cache_bytes)    # (w, h) -> Targets
-        self._gbuffers = ByteLRU(cache_bytes)   # (slot, w, h) -> GBuffer
+        # half of the budget each: scratch targets by size, cached scene passes by slot
+        self._targets = ByteLRU(cache_bytes // 2)    # (w, h) -> Targets
+        self._gbuffers = ByteLRU(cache_bytes // 2)   # (slot, w, h) -> GBuffer
         self._noise: dict[tuple, moderngl.Texture] = {}
         self._rays_fbo: tuple | None = None
         self._sim_cache: OrderedDict = OrderedDict()
         self._probe_fbo: moderngl.Framebuffer | None = None
+        self._park_fbo: moderngl.Framebuffer | None = None
 
     # ------------------------------------------------------------ programs
 
@@ -245,8 +247,17 @@ class Renderer:
         return self._targets.get((w, h), lambda: Targets(
             (w, h), self.ctx.framebuffer(color_attachments=[self.ctx.renderbuffer((w, h), 4)])))
 
+    def _park(self) -> None:
+        """Bind a framebuffer that is never released: releasing the bound framebuffer
+        leaves GL_INVALID_OPERATION behind (moderngl), so every release happens
+        with this one bound."""
+        if self._park_fbo is None:
+            self._park_fbo = self.ctx.framebuffer(color_attachments=[self.ctx.renderbuffer((1, 1), 4)])
+        self._park_fbo.use()
+
     def trim(self, keep_targets=(), keep_gbuffers=()) -> None:
         """Hold both GL caches to their byte budgets (after a frame, keeping its own)."""
+        self._park()
         self._targets.trim(keep_targets)
         self._gbuffers.trim(keep_gbuffers)
 
@@ -255,6 +266,7 @@ class Renderer:
 
     def release_caches(self) -> None:
         """Free every cached target and scene pass (a worker over its memory budget)."""
+        self._park()
         self._targets.clear()
         self._gbuffers.clear()
         for tex in self._noise.values():
@@ -284,6 +296,7 @@ class Renderer:
 
     def drop_slot(self, slot: str) -> None:
         """Free a slot's cached scene passes (a session ended)."""
+        self._park()
         for key in [k for k in self._gbuffers.keys() if k[0] == slot]:
             self._gbuffers.pop(key)
 
@@ -528,8 +541,10 @@ class Renderer:
         if self._rays_fbo is None or self._rays_fbo[0] < rows:
             cap = 1 << max(0, (rows - 1).bit_length())
             if self._rays_fbo is not None:
-                for obj in self._rays_fbo[1:]:
-                    obj.release()
+                self._park()
+                _, old_rays, _, old_fbo = self._rays_fbo
+                release_fbo(old_fbo)   # the framebuffer first, then its target texture
+                old_rays.release()
             rays = self.ctx.texture((RAYS_PER_ROW, 2 * cap), 4, dtype="f4")
             rays.filter = (moderngl.NEAREST, moderngl.NEAREST)
             target = self.ctx.texture((RAYS_PER_ROW, cap), 1, dtype="f4")

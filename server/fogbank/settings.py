@@ -30,6 +30,8 @@ class Settings(BaseSettings):
                                    "before a job starts; beyond, 503")
     worker_cache_mb: int = Field(256, ge=16, le=65536, description="GL cache budget of each worker "
                                  "(render targets and cached scene passes), MiB")
+    batch_cache_mb: int = Field(128, ge=16, le=65536, description="GL cache budget of each batch "
+                                "worker, MiB (stills rarely reuse a cached scene pass)")
     worker_memory_mb: int = Field(1024, ge=128, le=262144, description="resident memory above which "
                                   "a worker frees its caches, and is replaced if still over, MiB")
     still_budget_s: float = Field(20.0, gt=0, le=3600, description="estimated render seconds a still "
@@ -40,6 +42,8 @@ class Settings(BaseSettings):
                                       "run on the interactive workers, the rest on the batch ones")
     cost_scale: float = Field(1.0, gt=0, le=100, description="multiplies cost estimates (below 1 on "
                               "a GPU)")
+    worker_start_s: float = Field(30.0, gt=0, le=600, description="how long a new worker may take "
+                                  "to start before a worker that starts no job is taken for stuck")
     probe_interval_s: float = Field(1.0, gt=0, le=60, description="an idle worker is probed this often")
     probe_deadline_s: float = Field(5.0, gt=0, le=600, description="deadline of a probe")
     liveness_s: float = Field(10.0, gt=0, le=600, description="/healthz fails when no worker has "

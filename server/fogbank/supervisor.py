@@ -21,7 +21,6 @@ from __future__ import annotations
 import asyncio
 import logging
 import multiprocessing
-import os
 import threading
 import time
 from concurrent.futures import CancelledError as FutureCancelled
@@ -32,7 +31,7 @@ from typing import Any, Callable
 
 from pebble import ProcessExpired, ProcessPool
 
-from . import metrics, worker
+from . import metrics, proctree, worker
 
 log = logging.getLogger("fogbank.workers")
 
@@ -81,7 +80,8 @@ class Lane:
         s = self.sup.settings
         return ProcessPool(max_workers=1, initializer=worker.init,
                            initargs=(s.gl_backend, s.gl_device, self.nice,
-                                     s.worker_cache_mb << 20, s.worker_memory_mb << 20),
+                                     (s.worker_cache_mb if self.name == "interactive" else s.batch_cache_mb) << 20,
+                                     s.worker_memory_mb << 20),
                            context=multiprocessing.get_context("spawn"))
 
     def least_loaded(self, by: str = "jobs") -> Slot:
@@ -180,9 +180,11 @@ class Supervisor:
                 waiter.cancel()
                 fut.cancel()   # pebble kills the worker if the job had started
                 metrics.ERRORS.labels("queue_timeout").inc()
-                if not any(f.running() for f in slot.inflight) and time.monotonic() - slot.last_ok > queue_s:
-                    # nothing started in all that time: the worker itself is stuck (a hung
-                    # start, a stopped process), and no deadline can fire for it
+                since = max(slot.last_ok, slot.started + self.settings.worker_start_s)
+                if not any(f.running() for f in slot.inflight) and time.monotonic() - since > queue_s:
+                    # nothing started in all that time (after a new worker's allowance to
+                    # start): the worker itself is stuck (a hung start, a stopped
+                    # process), and no deadline can fire for it
                     log.error("worker stuck; replacing it", extra={"lane": slot.lane, "worker": slot.index})
                     lane.recycle(slot, "stuck", hard=True)
                 raise QueueTimeout(f"the {slot.lane} renderer is busy: the job waited over "
@@ -264,13 +266,5 @@ class Supervisor:
         return sum(s.jobs for s in self.slots())
 
     def tree_rss(self) -> int:
-        """Memory of the web process and every worker (bytes)."""
-        total = worker.rss_bytes()
-        for s in self.slots():
-            if s.pid:
-                try:
-                    with open(f"/proc/{s.pid}/statm") as f:
-                        total += int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
-                except OSError:
-                    pass
-        return total
+        """Memory of the web process and all its descendants (bytes)."""
+        return proctree.tree_rss_bytes()

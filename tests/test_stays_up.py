@@ -1,0 +1,234 @@
+"""The service stays up (a real server process, its render workers, real GL):
+
+- a heavy still renders in a worker while /healthz, /metrics and small stills answer and
+  a stream keeps getting frames (it froze the whole process for 57 s before);
+- a still past its deadline is stopped (its worker killed and replaced) and answered
+  with 503 + Retry-After, and the service goes on;
+- memory of the whole process tree stays within budget under stills and streams of
+  many sizes (20 stills at 1280..1299 x 720 took RSS from 164 MB to 1.84 GB before);
+- request limits answer in JSON before anything is parsed."""
+
+from __future__ import annotations
+
+import asyncio
+import http.client
+import json
+import socket
+import threading
+import time
+import urllib.error
+import urllib.request
+
+import pytest
+import websockets
+
+from fogbank import proctree
+from servers import Server
+
+HEAVY = {"width": 1920, "height": 1080, "layers": [{"kind": "noise", "mode": "volume", "samples": 128}]}
+
+
+def post_still(url: str, body: dict, timeout: float = 120):
+    req = urllib.request.Request(url + "/api/still?format=png", data=json.dumps(body).encode(),
+                                 headers={"Content-Type": "application/json"})
+    try:
+        with urllib.request.urlopen(req, timeout=timeout) as r:
+            return r.status, r.headers, r.read()
+    except urllib.error.HTTPError as e:
+        return e.code, e.headers, e.read()
+
+
+def get(url: str, timeout: float = 30) -> tuple[int, float, bytes]:
+    t0 = time.monotonic()
+    try:
+        with urllib.request.urlopen(url, timeout=timeout) as r:
+            return r.status, time.monotonic() - t0, r.read()
+    except urllib.error.HTTPError as e:
+        return e.code, time.monotonic() - t0, e.read()
+
+
+async def count_frames(url: str, seconds: float) -> int:
+    async with websockets.connect(url.replace("http", "ws", 1) + "/ws?v=1&time=3") as ws:
+        await ws.recv(), await ws.recv()
+        await ws.send(json.dumps({"type": "view", "width": 320, "height": 180, "fps": 30}))
+        n, t0 = 0, time.monotonic()
+        while time.monotonic() - t0 < seconds:
+            try:
+                m = await asyncio.wait_for(ws.recv(), 1.0)
+            except asyncio.TimeoutError:
+                continue
+            if isinstance(m, bytes):
+                n += 1
+                await ws.send(json.dumps({"type": "ack", "frame": int.from_bytes(m[4:8], "little")}))
+        return n
+
+
+@pytest.fixture(scope="module")
+def server():
+    srv = Server().start()
+    yield srv
+    srv.stop()
+
+
+def test_everyone_is_served_while_a_heavy_still_renders(server):
+    url = server.url
+    result = {}
+    t = threading.Thread(target=lambda: result.update(r=post_still(url, HEAVY)))
+    t0 = time.monotonic()
+    t.start()
+    time.sleep(0.5)
+    health = [get(url + "/healthz") for _ in range(10)]
+    metrics = get(url + "/metrics")
+    small = get(url + "/api/still.jpg?width=320&height=180&time=11")
+    frames = asyncio.run(count_frames(url, 3.0))
+    busy_for = time.monotonic() - t0
+    t.join(120)
+    status, _, png = result["r"]
+    heavy_s = time.monotonic() - t0
+    print(f"\nheavy still {heavy_s:.1f} s; healthz max {max(h[1] for h in health) * 1000:.0f} ms; "
+          f"small still {small[1]:.2f} s; {frames} stream frames in 3 s")
+    assert status == 200 and png[:8] == b"\x89PNG\r\n\x1a\n"
+    assert heavy_s > busy_for                    # it was rendering throughout the checks
+    assert all(h[0] == 200 for h in health)
+    assert max(h[1] for h in health) < 0.5       # was 57 s
+    assert metrics[0] == 200 and metrics[1] < 0.5
+    assert small[0] == 200 and small[1] < 2.0
+    assert frames >= 5
+
+
+def test_a_still_past_its_deadline_is_a_503_and_the_service_goes_on():
+    srv = Server(env={"FOGBANK_RENDER_TIMEOUT_S": "1.5"}).start()
+    try:
+        t0 = time.monotonic()
+        status, headers, body = post_still(srv.url, HEAVY)
+        took = time.monotonic() - t0
+        assert status == 503
+        assert headers["Retry-After"] == "5"
+        assert "took over 1.5 s" in json.loads(body)["detail"]
+        assert took < 6.0                                   # stopped, not waited out
+        assert get(srv.url + "/healthz")[0] == 200
+        assert get(srv.url + "/api/still.jpg?width=160&height=90&time=4")[0] == 200
+        text = get(srv.url + "/metrics")[2].decode()
+        assert 'fogbank_deadline_kills_total{lane="batch"} 1.0' in text
+        assert 'fogbank_worker_restarts_total{lane="batch",why="deadline"} 1.0' in text
+    finally:
+        srv.stop()
+
+
+def test_memory_of_the_process_tree_stays_within_budget():
+    """20 stills of different sizes, then 8 viewers at 5 window sizes: the tree stays
+    within 500 MB of its warm size (the Deployment allows 2 GiB)."""
+    srv = Server().start()
+    try:
+        get(srv.url + "/api/still.jpg?width=1280&height=720")
+        asyncio.run(count_frames(srv.url, 1.0))
+        warm = proctree.tree_rss_bytes(srv.proc.pid)
+        for w in range(1280, 1300):
+            assert get(srv.url + f"/api/still.jpg?width={w}&height=720", timeout=60)[0] == 200
+        after_stills = proctree.tree_rss_bytes(srv.proc.pid)
+
+        async def viewers():
+            sizes = [(640, 360), (800, 450), (960, 540), (1280, 720), (1920, 1080)]
+
+            async def one(i):
+                w, h = sizes[i % len(sizes)]
+                async with websockets.connect(srv.url.replace("http", "ws", 1) + f"/ws?v=1&camera.yaw={i * 7}") as ws:
+                    await ws.recv(), await ws.recv()
+                    await ws.send(json.dumps({"type": "view", "width": w, "height": h}))
+                    t0 = time.monotonic()
+                    n = 0
+                    while time.monotonic() - t0 < 8:
+                        try:
+                            m = await asyncio.wait_for(ws.recv(), 1.0)
+                        except asyncio.TimeoutError:
+                            continue
+                        if isinstance(m, bytes):
+                            n += 1
+                            await ws.send(json.dumps({"type": "ack", "frame": int.from_bytes(m[4:8], "little")}))
+                            if n % 3 == 0:   # and the window is resized now and then
+                                w2, h2 = sizes[(i + n) % len(sizes)]
+                                await ws.send(json.dumps({"type": "view", "width": w2, "height": h2}))
+                    return n
+            return await asyncio.gather(*(one(i) for i in range(8)))
+        frames = asyncio.run(viewers())
+        after = proctree.tree_rss_bytes(srv.proc.pid)
+        mb = 2 ** 20
+        print(f"\ntree RSS: warm {warm / mb:.0f} MB, after 20 stills {after_stills / mb:.0f} MB, "
+              f"after 8 viewers {after / mb:.0f} MB; frames per viewer {frames}")
+        assert all(n >= 1 for n in frames)
+        assert after_stills - warm < 500 * mb
+        assert after - warm < 500 * mb
+        assert after < 2 * 1024 * mb
+    finally:
+        srv.stop()
+
+
+# ---------------------------------------------------------------- request limits
+
+
+def raw(port: int, data: bytes, read: int = 65536, timeout: float = 10) -> bytes:
+    with socket.create_connection(("127.0.0.1", port), timeout=timeout) as s:
+        try:
+            s.sendall(data)
+        except (BrokenPipeError, ConnectionResetError):
+            pass
+        out = b""
+        try:
+            while len(out) < read:
+                chunk = s.recv(65536)
+                if not chunk:
+                    break
+                out += chunk
+        except (ConnectionResetError, socket.timeout):
+            pass
+        return out
+
+
+def status_and_json(resp: bytes) -> tuple[int, dict]:
+    head, _, body = resp.partition(b"\r\n\r\n")
+    assert b"application/json" in head.lower(), head
+    return int(head.split()[1]), json.loads(body)
+
+
+def test_a_100_mb_body_is_refused_before_it_is_read(server):
+    before = proctree.tree_rss_bytes(server.proc.pid)
+    c = http.client.HTTPConnection("127.0.0.1", server.port, timeout=30)
+    c.putrequest("POST", "/api/still")
+    c.putheader("Content-Type", "application/json")
+    c.putheader("Content-Length", str(100 << 20))
+    c.endheaders()
+    r = c.getresponse()
+    assert r.status == 413
+    assert "at most" in json.loads(r.read())["detail"][0]["msg"]
+    # and without a Content-Length: counted as it arrives
+    head = (b"POST /api/still HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
+            b"Transfer-Encoding: chunked\r\n\r\n")
+    chunk = b"%x\r\n" % (1 << 20) + b" " * (1 << 20) + b"\r\n"
+    status, body = status_and_json(raw(server.port, head + chunk * 4))
+    assert status == 413 and body["detail"][0]["loc"] == ["body"]
+    assert proctree.tree_rss_bytes(server.proc.pid) - before < 50 << 20
+
+
+def test_over_long_urls_and_headers_get_json(server):
+    status, body = status_and_json(raw(server.port, b"GET /api/still.png?" + b"a" * 100_000 +
+                                       b" HTTP/1.1\r\nHost: x\r\n\r\n"))
+    assert status == 414 and "32768" in body["detail"][0]["msg"]
+    many = b"".join(b"X-%d: y\r\n" % i for i in range(100_000))
+    status, body = status_and_json(raw(server.port, b"GET /healthz HTTP/1.1\r\nHost: x\r\n" + many + b"\r\n"))
+    assert status in (400, 431) and body["detail"]
+    huge = b"X-Big: " + b"a" * (8 << 20) + b"\r\n"
+    status, body = status_and_json(raw(server.port, b"GET /healthz HTTP/1.1\r\nHost: x\r\n" + huge + b"\r\n"))
+    assert status == 400 and "exceed" in body["detail"][0]["msg"]
+    status, body = status_and_json(raw(server.port, b"GET /healthz HTTP/1.1\r\nHost: x\r\n" +
+                                       b"".join(b"X-%d: y\r\n" % i for i in range(150)) + b"\r\n"))
+    assert status == 431 and body["detail"][0]["loc"] == ["headers"]
+    assert get(server.url + "/healthz")[0] == 200
+
+
+def test_head_is_answered(server):
+    for path in ("/", "/healthz", "/readyz"):
+        c = http.client.HTTPConnection("127.0.0.1", server.port, timeout=10)
+        c.request("HEAD", path)
+        r = c.getresponse()
+        assert (path, r.status) == (path, 200)
+        assert r.read() == b""
