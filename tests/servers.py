@@ -3,17 +3,37 @@ PID it was started with."""
 
 from __future__ import annotations
 
+import asyncio
 import os
 import signal
 import socket
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 import urllib.request
 from pathlib import Path
 
 DOCKER = Path(__file__).resolve().parents[1] / "docker"
+
+
+def run_async(coro):
+    """asyncio.run in a thread of its own: Playwright's sync API keeps a loop running in
+    the test thread once a browser is up."""
+    out = {}
+
+    def target():
+        try:
+            out["value"] = asyncio.run(coro)
+        except BaseException as exc:  # noqa: BLE001 - re-raised in the test thread
+            out["error"] = exc
+    t = threading.Thread(target=target)
+    t.start()
+    t.join()
+    if "error" in out:
+        raise out["error"]
+    return out["value"]
 
 
 def free_port() -> int:

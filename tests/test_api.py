@@ -158,3 +158,31 @@ def test_healthz_names_renderer(client):
 def test_docs(client):
     assert client.get("/docs").status_code == 200
     assert "/api/still" in client.get("/openapi.json").json()["paths"]
+
+
+def test_openapi_describes_the_look(client):
+    doc = client.get("/openapi.json").json()
+    body = doc["paths"]["/api/still"]["post"]["requestBody"]["content"]["application/json"]["schema"]
+    assert body == {"$ref": "#/components/schemas/StillParams"}
+    assert "camera" in doc["components"]["schemas"]["StillParams"]["properties"]
+    names = {p["name"] for p in doc["paths"]["/api/still.{fmt}"]["get"]["parameters"]}
+    assert {"camera.yaw", "wind.speed", "layers", "effects.fog_scale", "width", "preset"} <= names
+    tr = doc["components"]["schemas"]["TransmittanceRequest"]["properties"]["params"]
+    assert tr["$ref"] == "#/components/schemas/FogParams"
+    assert doc["components"]["schemas"]["Height"]["required"] == ["kind"]
+
+
+def test_schema_valid_input_is_accepted_and_nothing_beyond_it(client):
+    """Found by wiring the look's schema into schemathesis: 177.0 is an integer to JSON
+    Schema and was refused; booleans accepted 0/1 and colours beyond the schema's."""
+    r = client.post("/api/still?format=jpg", json={"width": 32.0, "height": 24})
+    assert r.status_code == 200
+    bad = [({"layers": [{"kind": "height", "enabled": 1}]}, ["body", "layers", 0, "height", "enabled"]),
+           ({"width": 32.5}, ["body", "width"]),
+           ({"fog_color": "red"}, ["body", "fog_color"]),
+           ({"layers": [{"density": 0.1}]}, ["body", "layers", 0])]
+    for patch, loc in bad:
+        r = client.post("/api/still", json={"width": 32, "height": 24, **patch})
+        assert (r.status_code, r.json()["detail"][0]["loc"][:len(loc)]) == (422, loc)
+    assert client.post("/api/still?format=jpg", json={"width": 32, "height": 24,
+                                                      "fog_color": "C5CCD6"}).status_code == 200

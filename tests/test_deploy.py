@@ -20,26 +20,8 @@ import pytest
 import websockets
 import yaml
 
-from servers import DOCKER, Nginx, Server
+from servers import DOCKER, Nginx, Server, run_async
 from test_page import canvas_pixels, new_page, wait_frames, wait_full_frame_of_current_version
-
-
-def run_async(coro):
-    """asyncio.run in a thread of its own: Playwright's sync API keeps a loop running in
-    the test thread once a browser is up."""
-    out = {}
-
-    def target():
-        try:
-            out["value"] = asyncio.run(coro)
-        except BaseException as exc:  # noqa: BLE001 - re-raised in the test thread
-            out["error"] = exc
-    t = threading.Thread(target=target)
-    t.start()
-    t.join()
-    if "error" in out:
-        raise out["error"]
-    return out["value"]
 
 
 def test_dockerfile_lints_clean():

@@ -23,7 +23,7 @@ import pytest
 import websockets
 
 from fogbank import proctree
-from servers import Server
+from servers import Server, run_async
 
 HEAVY = {"width": 1920, "height": 1080, "layers": [{"kind": "noise", "mode": "volume", "samples": 128}]}
 
@@ -80,7 +80,7 @@ def test_everyone_is_served_while_a_heavy_still_renders(server):
     health = [get(url + "/healthz") for _ in range(10)]
     metrics = get(url + "/metrics")
     small = get(url + "/api/still.jpg?width=320&height=180&time=11")
-    frames = asyncio.run(count_frames(url, 3.0))
+    frames = run_async(count_frames(url, 3.0))
     busy_for = time.monotonic() - t0
     t.join(120)
     status, _, png = result["r"]
@@ -121,7 +121,7 @@ def test_memory_of_the_process_tree_stays_within_budget():
     srv = Server().start()
     try:
         get(srv.url + "/api/still.jpg?width=1280&height=720")
-        asyncio.run(count_frames(srv.url, 1.0))
+        run_async(count_frames(srv.url, 1.0))
         warm = proctree.tree_rss_bytes(srv.proc.pid)
         for w in range(1280, 1300):
             assert get(srv.url + f"/api/still.jpg?width={w}&height=720", timeout=60)[0] == 200
@@ -150,7 +150,7 @@ def test_memory_of_the_process_tree_stays_within_budget():
                                 await ws.send(json.dumps({"type": "view", "width": w2, "height": h2}))
                     return n
             return await asyncio.gather(*(one(i) for i in range(8)))
-        frames = asyncio.run(viewers())
+        frames = run_async(viewers())
         after = proctree.tree_rss_bytes(srv.proc.pid)
         mb = 2 ** 20
         print(f"\ntree RSS: warm {warm / mb:.0f} MB, after 20 stills {after_stills / mb:.0f} MB, "

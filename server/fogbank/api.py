@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import asyncio
 import hashlib
 import json
 import math
@@ -21,7 +20,7 @@ from fastapi.staticfiles import StaticFiles
 from starlette.exceptions import HTTPException as StarletteHTTPException
 from pydantic import BaseModel, Field, ValidationError, model_validator
 
-from . import STATIC_DIR, __version__, cost, metrics, worker
+from . import STATIC_DIR, __version__, cost, metrics, openapi, worker
 from . import presets as P
 from .encode import MEDIA_TYPES
 from .limits import RequestLimits
@@ -168,6 +167,12 @@ def create_app(settings: Settings | None = None) -> FastAPI:
                               "/api/still.png.")
     app.state.drain = lambda: state.update(draining=True)
 
+    def custom_openapi():
+        if app.openapi_schema is None:
+            app.openapi_schema = openapi.build(app)
+        return app.openapi_schema
+    app.openapi = custom_openapi
+
     @app.exception_handler(RequestValidationError)
     async def _422(request: Request, exc: RequestValidationError):
         return JSONResponse({"detail": [_clean(e) for e in exc.errors()]}, status_code=422)
@@ -256,8 +261,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
                                               "server renders; the body names what to change"},
                          503: {"description": "busy or slow renderer; see Retry-After"}},
               openapi_extra={"requestBody": {"required": False, "content": {"application/json": {
-                  "schema": {"type": "object", "description": "StillParams fields (see /api/schema), "
-                             "a patch over the default preset"}}}}})
+                  "schema": {"type": "object"}}}}})   # the StillParams schema: see openapi.py
     async def still_post(request: Request, format: Literal["png", "jpg", "webp"] = "png"):
         raw = await request.body()
         try:

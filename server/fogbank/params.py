@@ -10,11 +10,13 @@ in 1/m (optical depth per metre), colours as sRGB hex "#rrggbb".
 from __future__ import annotations
 
 import math
+import re
 from typing import Annotated, Any, Literal, Union
 
 import numpy as np
 from pydantic import (
     AfterValidator,
+    BeforeValidator,
     BaseModel,
     ConfigDict,
     Field,
@@ -37,17 +39,31 @@ def num(default: float, lo: float, hi: float, step: float, unit: str = "", desc:
                  json_schema_extra={"step": step, "unit": unit})
 
 
+COLOR_PATTERN = r"^#?[0-9a-fA-F]{6}$"
+
+
 def _hex_color(v: str) -> str:
-    s = v.strip().lower().lstrip("#")
-    if len(s) != 6 or any(c not in "0123456789abcdef" for c in s):
-        raise ValueError("a colour is 6 hex digits, '#rrggbb'")
-    return "#" + s
+    if not re.fullmatch(COLOR_PATTERN, v):
+        raise ValueError("a colour is 6 hex digits, '#rrggbb' (the '#' may be left out)")
+    return "#" + v.lstrip("#").lower()
 
 
+# the pattern states exactly what the validator accepts (the JSON Schema and the model agree)
 Color = Annotated[str, AfterValidator(_hex_color),
-                  Field(json_schema_extra={"format": "color"})]
+                  Field(json_schema_extra={"format": "color", "pattern": COLOR_PATTERN})]
 Num = Annotated[float, Field(strict=True)]   # a number: not a boolean, not a string
-Int = Annotated[int, Field(strict=True)]
+
+
+def _integral(v: Any) -> Any:
+    """JSON Schema counts 177.0 as an integer: accept a float with no fraction as its
+    int. Anything else (177.5, true, "177") is left for the strict int check to refuse."""
+    if isinstance(v, float) and v.is_integer():
+        return int(v)
+    return v
+
+
+Int = Annotated[int, BeforeValidator(_integral), Field(strict=True)]
+Bool = Annotated[bool, Field(strict=True)]     # true or false: not 0/1, not "yes"
 Vec3 = tuple[Num, Num, Num]
 
 
@@ -98,9 +114,17 @@ class Sun(Strict):
 # ---------------------------------------------------------------- fog layers
 
 
+def _kind_required(schema: dict[str, Any], cls: type) -> None:
+    """`kind` picks a layer's class, so the JSON Schema requires it (a layer without one
+    matches no branch of the union)."""
+    if "kind" in schema.get("properties", {}):
+        schema["required"] = sorted(set(schema.get("required", [])) | {"kind"})
+
+
 class LayerBase(Strict):
-    enabled: bool = Field(True, description="a disabled layer is kept but not drawn")
-    wind: bool = Field(False, description="wind-sensitive: the density slides with wind * time")
+    model_config = ConfigDict(**Strict.model_config, json_schema_extra=_kind_required)
+    enabled: Bool = Field(True, description="a disabled layer is kept but not drawn")
+    wind: Bool = Field(False, description="wind-sensitive: the density slides with wind * time")
 
 
 class Homogeneous(LayerBase):
@@ -206,19 +230,19 @@ class Sphere(LayerBase):
 class Particles(LayerBase):
     """Fischer: a few free-floating particles; T = prod (1 - alpha s_j clamp(1 - dist_j/R, 0, 1))."""
     kind: Literal["particles"] = "particles"
-    count: int = Field(120, strict=True, ge=1, le=MAX_PARTICLES, description="particles alive at once (slots)")
+    count: Int = Field(120, ge=1, le=MAX_PARTICLES, description="particles alive at once (slots)")
     emitter: Vec3 = Field((10.0, 2.0, 0.0), description="where particles are born, m")
     direction: Vec3 = Field((0.0, 1.0, 0.0), description="mean launch direction")
     spread: float = num(25.0, 0, 180, 1, "deg", "cone half-angle around direction")
     speed: float = num(1.5, 0, 50, 0.1, "m/s", "launch speed")
-    life_min: int = Field(64, strict=True, ge=1, le=1000, description="shortest life, steps")
-    life_max: int = Field(128, strict=True, ge=1, le=1000, description="longest life, steps")
+    life_min: Int = Field(64, ge=1, le=1000, description="shortest life, steps")
+    life_max: Int = Field(128, ge=1, le=1000, description="longest life, steps")
     step: float = num(0.1, 0.005, 10, 0.005, "s", "simulation step", gt=True)
     radius: float = num(4.0, 0.01, 100, 0.1, "m", "R_j", gt=True)
     alpha: float = num(0.2, 0, 1, 0.01, "", "max opacity of one particle (0.2 fog, ~1 smoke)")
     gravity: float = num(0.0, -20, 20, 0.1, "m/s^2", "upward acceleration (negative falls)")
     drag: float = num(0.5, 0, 10, 0.05, "1/s", "relaxation of velocity toward the wind")
-    seed: int = Field(1, strict=True, ge=0, le=2**31 - 1, description="random seed")
+    seed: Int = Field(1, ge=0, le=2**31 - 1, description="random seed")
 
     @model_validator(mode="after")
     def _life(self) -> "Particles":
@@ -233,9 +257,9 @@ class Noise(LayerBase):
     mode: Literal["surface", "volume"] = "surface"
     density: float = num(0.02, 0, 10, 0.0005, "1/m", "rho")
     scale: float = num(60.0, 0.1, 10000, 0.5, "m", "size of one noise tile", gt=True)
-    height_falloff: bool = Field(True, description="surface mode: n * dY^2 / 2 + 0.001 (write-up)")
+    height_falloff: Bool = Field(True, description="surface mode: n * dY^2 / 2 + 0.001 (write-up)")
     falloff_scale: float = num(10.0, 0.01, 1000, 0.1, "m", "dY is measured in these units", gt=True)
-    samples: int = Field(16, strict=True, ge=1, le=128, description="volume mode: samples along the ray")
+    samples: Int = Field(16, ge=1, le=128, description="volume mode: samples along the ray")
 
 
 class Distance(LayerBase):
@@ -262,10 +286,10 @@ LAYER_CLASSES = {c.model_fields["kind"].default: c for c in
 
 class NoiseBake(Strict):
     """The one tiling noise texture that noise and distance layers sample."""
-    size: int = Field(64, strict=True, ge=8, le=128, description="texels per side (a power of two is best)")
-    octaves: int = Field(4, strict=True, ge=1, le=6, description="fractal octaves")
-    blur: int = Field(2, strict=True, ge=0, le=8, description="binomial blur order (0 = none)")
-    seed: int = Field(7, strict=True, ge=0, le=2**31 - 1)
+    size: Int = Field(64, ge=8, le=128, description="texels per side (a power of two is best)")
+    octaves: Int = Field(4, ge=1, le=6, description="fractal octaves")
+    blur: Int = Field(2, ge=0, le=8, description="binomial blur order (0 = none)")
+    seed: Int = Field(7, ge=0, le=2**31 - 1)
 
 
 class Effects(Strict):
@@ -305,8 +329,8 @@ class FogParams(Strict):
 
 class StillParams(FogParams):
     """A still: a look plus its size."""
-    width: int = Field(1280, strict=True, ge=1, le=4096, description="px")
-    height: int = Field(720, strict=True, ge=1, le=4096, description="px")
+    width: Int = Field(1280, ge=1, le=4096, description="px")
+    height: Int = Field(720, ge=1, le=4096, description="px")
 
     @model_validator(mode="after")
     def _pixels(self) -> "StillParams":

@@ -65,6 +65,13 @@ def _item_class(ann: Any, item: Any) -> type[BaseModel] | None:
     return None
 
 
+def _first_class(ann: Any) -> type[BaseModel] | None:
+    ann = _unwrap(ann)
+    if get_origin(ann) is Union:
+        return _unwrap(get_args(ann)[0])
+    return None
+
+
 def _list_arg(ann: Any) -> Any | None:
     ann = _unwrap(ann)
     if get_origin(ann) is list:
@@ -271,7 +278,9 @@ def _set(cls, value, key, text, errors) -> None:
                 if not text.isdigit() or int(text) > MAX_LIST:
                     _err(errors, key, f"a list length is an integer 0..{MAX_LIST}", "url_count")
                     return
-                fixed = _item_class(item_ann, {})
+                # items start from their class's defaults; in a union (layers) from its
+                # first class's, until `.N.kind` picks another
+                fixed = _item_class(item_ann, {}) or _first_class(item_ann)
                 node[part] = [fixed().model_dump(mode="json") if fixed else {}
                               for _ in range(int(text))]
             else:
