@@ -152,7 +152,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         log.info("renderer: %s", info)
         state["cache"] = StillCache(settings.stills_cache_mb << 20)
         state["stills"] = 0
-        state["streamer"] = Streamer(sup, settings=settings)
+        state["streamer"] = Streamer(sup, frames_per_worker=settings.frames_per_worker, settings=settings)
         state["streamer"].start()
         state["ready"] = True
         yield

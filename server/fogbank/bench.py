@@ -259,6 +259,47 @@ def stills(srv: ChildServer, repeat: int = 3) -> dict:
     return out
 
 
+def process_boundary(n: int = 300) -> dict:
+    """What handing a job to a render worker process and its result back costs: an empty
+    job's round trip, and a 640x360 frame's total time minus its time in the worker."""
+    import asyncio
+
+    from . import worker
+    from .settings import Settings
+    from .supervisor import Supervisor
+
+    async def measure():
+        sup = Supervisor(Settings(batch_workers=0))
+        await sup.start()
+        try:
+            slot = sup.interactive.slots[0]
+            for _ in range(20):
+                await sup.call(slot, worker.noop, deadline=30)
+            rt = []
+            for _ in range(n):
+                t0 = time.perf_counter()
+                await sup.call(slot, worker.noop, deadline=30)
+                rt.append((time.perf_counter() - t0) * 1000)
+            still = _still("default", 640, 360)
+            hand = []
+            for i in range(60):
+                st = still.model_copy(update={"time": 0.03 * i})
+                t0 = time.perf_counter()
+                out = await sup.call(slot, worker.frame, st, "bench", True, 80, deadline=30)
+                hand.append((time.perf_counter() - t0) * 1000 - out["run_s"] * 1000)
+            return rt, hand[10:]
+        finally:
+            await sup.stop()
+    rt, hand = asyncio.run(measure())
+    rt.sort()
+    hand.sort()
+    out = {"noop_p50_ms": rt[len(rt) // 2], "noop_p90_ms": rt[int(len(rt) * 0.9)],
+           "frame_handover_p50_ms": hand[len(hand) // 2], "frame_handover_p90_ms": hand[int(len(hand) * 0.9)]}
+    print(f"  empty job round trip p50 {out['noop_p50_ms']:.2f} ms; 640x360 frame hand-over "
+          f"p50 {out['frame_handover_p50_ms']:.2f} ms")
+    return out
+
+
 # ---------------------------------------------------------------- report
 
 def run(out_dir: str = "docs", quick: bool = False) -> dict:
@@ -284,6 +325,8 @@ def run(out_dir: str = "docs", quick: bool = False) -> dict:
         res["stills_ms"] = stills(srv)
     finally:
         srv.stop()
+    print("7. the process boundary (web process <-> render worker)")
+    res["process_boundary"] = process_boundary()
     Path(out_dir).mkdir(parents=True, exist_ok=True)
     Path(out_dir, "bench.json").write_text(json.dumps(res, indent=1))
     Path(out_dir, "bench.md").write_text(markdown(res))
@@ -349,4 +392,13 @@ def markdown(res: dict) -> str:
     s = res["stills_ms"]
     L += ["", "## 6. Stills (1920x1080, over HTTP, uncached)", "", "| format | ms |", "|---|---|"]
     L += [f"| {k} | {v:.0f} |" for k, v in s.items()]
+    pb = res.get("process_boundary")
+    if pb:
+        L += ["", "## 7. The process boundary", "",
+              "GL runs in render worker processes; each job and its result cross a pipe "
+              "(pebble). Measured through the supervisor in this process.", "",
+              "| | p50 ms | p90 ms |", "|---|---|---|",
+              f"| empty job, round trip | {pb['noop_p50_ms']:.2f} | {pb['noop_p90_ms']:.2f} |",
+              f"| 640x360 frame, total minus time in the worker | {pb['frame_handover_p50_ms']:.2f} | "
+              f"{pb['frame_handover_p90_ms']:.2f} |"]
     return "\n".join(L) + "\n"

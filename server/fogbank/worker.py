@@ -184,6 +184,11 @@ def transmittance(fog, origins: np.ndarray, directions: np.ndarray, lengths: np.
     return _run(fn)
 
 
+def noop() -> dict[str, Any]:
+    """An empty job: what the process boundary alone costs (benchmark)."""
+    return _run(lambda r: {})
+
+
 def drop_slot(slot: str) -> dict[str, Any]:
     def fn(r):
         r.drop_slot(slot)
