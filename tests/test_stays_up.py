@@ -118,7 +118,7 @@ def test_a_still_past_its_deadline_is_a_503_and_the_service_goes_on():
 def test_memory_of_the_process_tree_stays_within_budget():
     """20 stills of different sizes, then 8 viewers at 5 window sizes: the tree stays
     within 500 MB of its warm size (the Deployment allows 2 GiB)."""
-    srv = Server().start()
+    srv = Server(env={"FOGBANK_MAX_SESSIONS_PER_CLIENT": "64"}).start()   # 8 viewers from 127.0.0.1
     try:
         get(srv.url + "/api/still.jpg?width=1280&height=720")
         run_async(count_frames(srv.url, 1.0))
@@ -232,3 +232,60 @@ def test_head_is_answered(server):
         r = c.getresponse()
         assert (path, r.status) == (path, 200)
         assert r.read() == b""
+
+
+def test_healthz_fails_while_no_worker_renders_and_readyz_says_why():
+    """/healthz said ok while every still was 503 and streams were at 0 frames."""
+    import os
+    import signal
+    srv = Server(env={"FOGBANK_LIVENESS_S": "1.5", "FOGBANK_PROBE_INTERVAL_S": "0.2",
+                      "FOGBANK_PROBE_DEADLINE_S": "60", "FOGBANK_WORKER_START_S": "60"}).start()
+    workers = [p for p in proctree.descendants(srv.proc.pid)
+               if p != srv.proc.pid and "spawn_main" in open(f"/proc/{p}/cmdline").read()
+               and "resource_tracker" not in open(f"/proc/{p}/cmdline").read()]
+    try:
+        assert len(workers) == 2 and get(srv.url + "/healthz")[0] == 200
+        for p in workers:
+            os.kill(p, signal.SIGSTOP)          # hung: alive, rendering nothing
+        time.sleep(3.0)
+        status, took, body = get(srv.url + "/healthz")
+        assert status == 503 and took < 0.5
+        assert json.loads(body)["status"] == "failing"
+        status, _, body = get(srv.url + "/readyz")
+        assert status == 503 and json.loads(body)["status"] == "failing"
+        for p in workers:
+            os.kill(p, signal.SIGCONT)
+        time.sleep(2.0)
+        assert get(srv.url + "/healthz")[0] == 200
+        assert get(srv.url + "/readyz")[0] == 200
+    finally:
+        for p in workers:
+            try:
+                os.kill(p, signal.SIGCONT)
+            except ProcessLookupError:
+                pass
+        srv.stop()
+
+
+def test_the_per_client_cap_holds_when_sessions_connect_at_once():
+    """The caps were checked before a session was counted: 8 sockets opened at once all
+    passed a cap of 4."""
+    srv = Server(env={"FOGBANK_MAX_SESSIONS_PER_CLIENT": "3"}).start()
+    try:
+        async def one():
+            async with websockets.connect(srv.url.replace("http", "ws", 1) + "/ws") as ws:
+                first = json.loads(await ws.recv())
+                if first["type"] == "hello":
+                    await asyncio.sleep(1.0)          # hold the session while the others try
+                    return "open"
+                try:
+                    await ws.recv()
+                except websockets.ConnectionClosed as exc:
+                    return exc.rcvd.code if exc.rcvd else None
+
+        async def burst():
+            return await asyncio.gather(*(one() for _ in range(8)))
+        got = run_async(burst())
+        assert sorted(got, key=str) == sorted(["open"] * 3 + [1013] * 5, key=str)
+    finally:
+        srv.stop()

@@ -3,6 +3,7 @@ a free port, its log in a file, its memory from /proc, stopped by its PID."""
 
 from __future__ import annotations
 
+import os
 import socket
 import subprocess
 import sys
@@ -21,8 +22,10 @@ class ChildServer:
             self.port = s.getsockname()[1]
         self.url = f"http://127.0.0.1:{self.port}"
         self.log = tempfile.NamedTemporaryFile(prefix="fogbank-child-", suffix=".log", delete=False)
+        # every load client comes from 127.0.0.1: lift the per-address session cap
+        env = {**os.environ, "FOGBANK_MAX_SESSIONS_PER_CLIENT": "1000"}
         self.proc = subprocess.Popen([sys.executable, "-m", "fogbank.cli", "serve", "--host", "127.0.0.1",
-                                      "--port", str(self.port)], stdout=self.log, stderr=subprocess.STDOUT)
+                                      "--port", str(self.port)], stdout=self.log, stderr=subprocess.STDOUT, env=env)
         deadline = time.monotonic() + timeout
         while time.monotonic() < deadline:
             try:

@@ -57,8 +57,9 @@ class Settings(BaseSettings):
     max_stills: int = Field(4, ge=1, le=256, description="still renders at once; beyond, 503")
     messages_per_s: float = Field(120.0, gt=0, description="per-socket message rate (token bucket)")
     message_burst: int = Field(240, ge=1, description="per-socket burst of messages")
-    max_sessions_per_client: int = Field(4, ge=1, le=10000, description="streaming sessions one "
-                                         "client address may hold; the next is refused with 1013")
+    max_sessions_per_client: int = Field(8, ge=1, le=10000, description="streaming sessions one "
+                                         "client address may hold (a classroom behind one NAT shares "
+                                         "an address); the next is refused with 1013")
     idle_timeout_s: float = Field(300.0, gt=0, le=86400, description="a WebSocket that sends nothing "
                                   "this long is closed (code 4408)")
     ack_timeout_s: float = Field(30.0, gt=0, le=3600, description="a WebSocket that leaves frames "

@@ -252,6 +252,8 @@ async def websocket_endpoint(ws: WebSocket, streamer: Streamer, renderer_info: d
     await ws.accept()
     addr = ws.client.host if ws.client else "?"
     refusal = None
+    # check and register with no await in between: sessions connecting at once must not
+    # all pass the caps before any of them is counted
     if len(streamer.clients) >= cfg.max_sessions:
         metrics.ERRORS.labels("sessions_full").inc()
         refusal = f"the server is full ({cfg.max_sessions} sessions); retry in a few seconds"
@@ -267,14 +269,18 @@ async def websocket_endpoint(ws: WebSocket, streamer: Streamer, renderer_info: d
     bucket = TokenBucket(cfg.messages_per_s, cfg.message_burst, now)
     session = Session(uuid.uuid4().hex[:12], now)
     client = Client(session, ws, addr, now)
-    query = ws.url.query
-    initial = session.apply(QueryMsg(type="query", query=query), now) if query else [session.state(now)]
-    await client.send_json({"type": "hello", "protocol": PROTOCOL, "session": session.id,
-                            "renderer": renderer_info.get("renderer"),
-                            "max_message": MAX_MESSAGE})
-    for out in initial:
-        await client.send_json(out)
     streamer.add(client)
+    try:
+        query = ws.url.query
+        initial = session.apply(QueryMsg(type="query", query=query), now) if query else [session.state(now)]
+        await client.send_json({"type": "hello", "protocol": PROTOCOL, "session": session.id,
+                                "renderer": renderer_info.get("renderer"),
+                                "max_message": MAX_MESSAGE})
+        for out in initial:
+            await client.send_json(out)
+    except Exception:
+        streamer.remove(client)
+        raise
     log.info("session opened", extra={"session": session.id, "query": query})
     try:
         while True:

@@ -87,9 +87,13 @@ class Lane:
     def least_loaded(self, by: str = "jobs") -> Slot:
         return min(self.slots, key=lambda s: (getattr(s, by), s.jobs, s.index))
 
-    def recycle(self, slot: Slot, why: str, hard: bool = False) -> None:
+    def recycle(self, slot: Slot, why: str, hard: bool = False, expected: ProcessPool | None = None) -> None:
         """Replace a slot's worker. Gently (between jobs): queued jobs finish on the old
-        one, which then exits. Hard (a stuck worker): the old one is killed now."""
+        one, which then exits. Hard (a stuck worker): the old one is killed now. With
+        `expected`, only if that pool is still the slot's (several failed jobs of one
+        broken pool replace it once)."""
+        if expected is not None and slot.pool is not expected:
+            return
         old = slot.pool
         slot.pool = self._pool()
         slot.pid = None
@@ -164,11 +168,12 @@ class Supervisor:
         lane = self.interactive if slot.lane == "interactive" else self.batch
         slot.jobs += 1
         t0 = time.monotonic()
+        pool = slot.pool
         try:
-            fut = slot.pool.schedule(fn, args=args, timeout=deadline)
+            fut = pool.schedule(fn, args=args, timeout=deadline)
         except RuntimeError:   # pebble: the pool is not running (broken, see below)
             slot.jobs -= 1
-            lane.recycle(slot, "broken")
+            lane.recycle(slot, "broken", expected=pool)
             raise WorkerError("the renderer process was being replaced; retry", retry_after=2) from None
         slot.inflight.add(fut)
         try:
@@ -186,7 +191,7 @@ class Supervisor:
                     # start): the worker itself is stuck (a hung start, a stopped
                     # process), and no deadline can fire for it
                     log.error("worker stuck; replacing it", extra={"lane": slot.lane, "worker": slot.index})
-                    lane.recycle(slot, "stuck", hard=True)
+                    lane.recycle(slot, "stuck", hard=True, expected=pool)
                 raise QueueTimeout(f"the {slot.lane} renderer is busy: the job waited over "
                                    f"{queue_s + deadline:g} s", retry_after=5)
             out = waiter.result()
@@ -206,7 +211,7 @@ class Supervisor:
         except BrokenProcessPool:
             # pebble marks a pool broken when its worker dies with no job running (the
             # initializer failed, or it was killed while idle): replace it
-            lane.recycle(slot, "broken")
+            lane.recycle(slot, "broken", expected=pool)
             raise WorkerError("the renderer process was lost; it has been replaced", retry_after=2) from None
         except FutureCancelled:
             raise WorkerError("the job was cancelled", retry_after=1) from None
@@ -221,7 +226,7 @@ class Supervisor:
         metrics.WORKER_RSS.labels(slot.lane, str(slot.index)).set(slot.rss)
         metrics.QUEUE_WAIT.labels(slot.lane).observe(max(0.0, now - t0 - out.get("run_s", 0.0)))
         if out.get("recycle") and lane is not None:
-            lane.recycle(slot, "memory")
+            lane.recycle(slot, "memory", expected=pool)
         return out
 
     # ------------------------------------------------------------ health

@@ -145,6 +145,8 @@ def probe() -> dict[str, Any]:
     def fn(r):
         t0 = time.perf_counter()
         ok = r.probe()
+        if not ok:   # the pipeline answers but draws wrong: not alive
+            raise RuntimeError("GL error after a job: the probe read back the wrong colour")
         return {"ok": ok, "ms": (time.perf_counter() - t0) * 1000.0, "info": r.info()}
     return _run(fn)
 

@@ -1,0 +1,52 @@
+"""The cost estimate: how it scales, what it names, and that its memory matches what the
+renderer really allocates for a still."""
+
+from __future__ import annotations
+
+from fogbank import cost
+from fogbank.params import StillParams
+
+
+def still(**kw) -> StillParams:
+    return StillParams.model_validate({"width": 1280, "height": 720, **kw})
+
+
+def test_seconds_scale_with_pixels_layers_and_samples():
+    base = cost.estimate(still())
+    big = cost.estimate(still(width=2560, height=1440))
+    assert 3.0 < (big.seconds - cost.SCENE_FIXED_S) / (base.seconds - cost.SCENE_FIXED_S) < 5.0
+    v16 = cost.estimate(still(layers=[{"kind": "noise", "mode": "volume", "samples": 16}]))
+    v128 = cost.estimate(still(layers=[{"kind": "noise", "mode": "volume", "samples": 128}]))
+    p16, p128 = (c.parts["layers[0] (noise, volume, %d samples)" % n] for c, n in ((v16, 16), (v128, 128)))
+    assert 6.0 < p128 / p16 < 8.5
+    quarter = cost.estimate(still(layers=[{"kind": "noise", "mode": "volume", "samples": 128}],
+                                  effects={"fog_scale": 4}))
+    assert abs(quarter.parts["layers[0] (noise, volume, 128 samples)"] * 16 - p128) < 1e-9
+    assert cost.estimate(still(), scale=0.1).seconds == base.seconds * 0.1
+
+
+def test_the_biggest_contributors_are_named_first():
+    c = cost.estimate(still(layers=[{"kind": "height"}, {"kind": "noise", "mode": "volume", "samples": 128},
+                                    {"kind": "particles", "count": 1000, "radius": 10}]))
+    top = c.biggest(2)
+    assert top[0] == "layers[1] (noise, volume, 128 samples)"
+    assert top[1] == "layers[2] (particles, 1000 of radius 10 m)"
+
+
+def test_disabled_layers_cost_nothing():
+    on = cost.estimate(still(layers=[{"kind": "noise", "mode": "volume", "samples": 128}]))
+    off = cost.estimate(still(layers=[{"kind": "noise", "mode": "volume", "samples": 128, "enabled": False}]))
+    assert off.seconds < on.seconds and not any(k.startswith("layers") for k in off.parts)
+
+
+def test_memory_estimate_covers_what_the_renderer_allocates(renderer):
+    from fogbank.renderer import Renderer
+    r = Renderer(renderer.ctx, cache_bytes=1 << 40)
+    for look in (still(width=640, height=360), still(width=800, height=600, effects={"blur": "separate"}),
+                 still(width=512, height=512, effects={"fog_scale": 2})):
+        r.release_caches()
+        r.render(look)
+        allocated = r.cache_bytes()
+        est = cost.estimate(look).memory
+        assert allocated <= est <= allocated * 1.25, (look.width, allocated, est)
+    r.release_caches()
