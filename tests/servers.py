@@ -4,6 +4,7 @@ PID it was started with."""
 from __future__ import annotations
 
 import asyncio
+import json
 import os
 import signal
 import socket
@@ -12,8 +13,11 @@ import sys
 import tempfile
 import threading
 import time
+import urllib.error
 import urllib.request
 from pathlib import Path
+
+import websockets
 
 DOCKER = Path(__file__).resolve().parents[1] / "docker"
 
@@ -34,6 +38,42 @@ def run_async(coro):
     if "error" in out:
         raise out["error"]
     return out["value"]
+
+
+HEAVY = {"width": 1920, "height": 1080, "layers": [{"kind": "noise", "mode": "volume", "samples": 128}]}
+
+
+def post_still(url: str, body: dict, timeout: float = 120):
+    """POST /api/still?format=png; (status, headers, body) whatever the status."""
+    req = urllib.request.Request(url + "/api/still?format=png", data=json.dumps(body).encode(),
+                                 headers={"Content-Type": "application/json"})
+    try:
+        with urllib.request.urlopen(req, timeout=timeout) as r:
+            return r.status, r.headers, r.read()
+    except urllib.error.HTTPError as e:
+        return e.code, e.headers, e.read()
+
+
+async def watch_stream(url: str, seconds: float, size=(320, 180), query: str = "v=1&time=3",
+                       resize=None) -> int:
+    """Open /ws, ask for `size`, acknowledge every frame for `seconds`; returns how many
+    frames came. `resize(n)` may return a new (width, height) after frame n."""
+    async with websockets.connect(url.replace("http", "ws", 1) + "/ws?" + query) as ws:
+        await ws.recv(), await ws.recv()
+        await ws.send(json.dumps({"type": "view", "width": size[0], "height": size[1], "fps": 30}))
+        n, t0 = 0, time.monotonic()
+        while time.monotonic() - t0 < seconds:
+            try:
+                m = await asyncio.wait_for(ws.recv(), 1.0)
+            except asyncio.TimeoutError:
+                continue
+            if isinstance(m, bytes):
+                n += 1
+                await ws.send(json.dumps({"type": "ack", "frame": int.from_bytes(m[4:8], "little")}))
+                new = resize(n) if resize else None
+                if new:
+                    await ws.send(json.dumps({"type": "view", "width": new[0], "height": new[1]}))
+        return n
 
 
 def free_port() -> int:

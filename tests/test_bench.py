@@ -40,3 +40,16 @@ def test_markdown_report_from_results():
     assert "| sphere | 2.0 | 1.0e-05 | 100 | 30.0 | 15.0x |" in md
     assert "| Constant | 800x600 | 9.0 | 512x512 | 6.6 |" in md
     assert "| 640x360 | 30 | 40 | 50 |" in md
+
+
+def test_process_boundary_is_measured_through_real_workers():
+    from fogbank.bench import process_boundary
+    pb = process_boundary(n=20)
+    assert set(pb) == {"noop_p50_ms", "noop_p90_ms", "frame_handover_p50_ms", "frame_handover_p90_ms"}
+    assert 0 < pb["noop_p50_ms"] <= pb["noop_p90_ms"]
+    assert 0 < pb["frame_handover_p50_ms"] <= pb["frame_handover_p90_ms"]
+    res = {"command": "c", "cpu": "c", "gl": {"renderer": "r", "version": "v"}, "date": "d",
+           "analytic_vs_raymarch": [], "biri_table1": [],
+           "gawron": {"fog_ms": 1.0, "single_ms": 2.0, "separate_ms": 3.0, "single_over_separate": 0.67},
+           "streaming": [], "concurrency": [], "stills_ms": {}, "process_boundary": pb}
+    assert "## 7. The process boundary" in markdown(res)

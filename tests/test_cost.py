@@ -50,3 +50,14 @@ def test_memory_estimate_covers_what_the_renderer_allocates(renderer):
         est = cost.estimate(look).memory
         assert allocated <= est <= allocated * 1.25, (look.width, allocated, est)
     r.release_caches()
+
+
+def test_first_draw_compile_is_charged_until_the_worker_has_drawn_the_program():
+    """Found by an outside attack: a 16x16 still of 16 volume-noise layers was estimated at
+    0.1 s, went to the worker that draws every stream, and held it for 30 s compiling."""
+    tiny = still(width=16, height=16, layers=[{"kind": "noise", "mode": "volume", "samples": 1}] * 16)
+    fresh, warm = cost.estimate(tiny), cost.estimate(tiny, compiled=True)
+    assert fresh.seconds > 20.0 > warm.seconds
+    assert fresh.biggest(1) == ["compiling the fog program for 16 layers (once per worker)"]
+    grows = [cost.jit_seconds(tuple(("noise/volume", False, 0) for _ in range(n))) for n in (4, 8, 12, 14, 16)]
+    assert grows == sorted(grows) and grows[-1] / grows[-2] > 3.0

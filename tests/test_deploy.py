@@ -12,6 +12,7 @@ import signal
 import subprocess
 import threading
 import time
+import urllib.error
 import urllib.request
 from pathlib import Path
 
@@ -20,7 +21,7 @@ import pytest
 import websockets
 import yaml
 
-from servers import DOCKER, Nginx, Server, run_async
+from servers import DOCKER, HEAVY, Nginx, Server, post_still, run_async
 from test_page import canvas_pixels, new_page, wait_frames, wait_full_frame_of_current_version
 
 
@@ -160,24 +161,10 @@ def test_sigterm_drains():
     assert not [e for e in logs if e["level"] == "error"]
 
 
-def _post(url: str, body: dict, timeout: float = 120):
-    import urllib.error
-    req = urllib.request.Request(url + "/api/still?format=png", data=json.dumps(body).encode(),
-                                 headers={"Content-Type": "application/json"})
-    try:
-        with urllib.request.urlopen(req, timeout=timeout) as r:
-            return r.status, r.headers, r.read()
-    except urllib.error.HTTPError as e:
-        return e.code, e.headers, e.read()
-
-
 def _metric(server: Server, name: str) -> float:
     with urllib.request.urlopen(server.url + "/metrics", timeout=5) as r:
         return sum(float(line.split()[-1]) for line in r.read().decode().splitlines()
                    if line.startswith(name + "{") or line.startswith(name + " "))
-
-
-HEAVY = {"width": 1920, "height": 1080, "layers": [{"kind": "noise", "mode": "volume", "samples": 128}]}
 
 
 def test_timed_out_and_busy_renders_are_not_replayed_nor_mark_replicas_down():
@@ -187,13 +174,13 @@ def test_timed_out_and_busy_renders_are_not_replayed_nor_mark_replicas_down():
                 for _ in range(2)]
     lb = Nginx([r.port for r in replicas]).start()
     try:
-        status, headers, body = _post(lb.url, HEAVY)
+        status, headers, body = post_still(lb.url, HEAVY)
         assert status == 503 and headers["Retry-After"] == "5"
         assert "took over 1.5 s" in json.loads(body)["detail"]
         assert sum(_metric(r, "fogbank_deadline_kills_total") for r in replicas) == 1   # not replayed
         results, health = [], []
         threads = [threading.Thread(target=lambda i=i: results.append(
-            _post(lb.url, {**HEAVY, "time": float(i)})[:3:2])) for i in range(12)]
+            post_still(lb.url, {**HEAVY, "time": float(i)})[:3:2])) for i in range(12)]
         for t in threads:
             t.start()
         t_end = time.monotonic() + 6
@@ -225,7 +212,7 @@ def test_a_still_whose_replica_dies_is_served_by_another():
         body = {"width": 1280, "height": 720, "time": 7.0,
                 "layers": [{"kind": "noise", "mode": "volume", "samples": 128}]}
         out = {}
-        t = threading.Thread(target=lambda: out.update(r=_post(lb.url, body)))
+        t = threading.Thread(target=lambda: out.update(r=post_still(lb.url, body)))
         t.start()
         busy = []
         deadline = time.monotonic() + 10

@@ -105,3 +105,29 @@ def test_random_and_truncated_messages_on_the_socket(app_client):
                 break
             if m.get("bytes"):
                 ws.send_json({"type": "ack", "frame": HEADER.unpack(m["bytes"][:36])[1]})
+
+
+def test_huge_integers_and_lone_surrogates_get_errors_not_crashes(app_client):
+    """Found by an outside attack: an integer of 5000 digits in a socket message raised in
+    json.loads and took the session down; a lone surrogate ('\\ud800', a legal JSON
+    escape) echoed in a 422 could not be encoded and turned it into a 500."""
+    r = app_client.post("/api/still", content=b'{"width": 32, "height": 24, "\\ud800": 1}',
+                        headers={"content-type": "application/json"})
+    assert r.status_code == 422
+    assert r.json()["detail"][0]["loc"][0] == "body" and "\\ud800" in r.text
+    r = app_client.post("/api/still", content=b'{"width": 1' + b"1" * 5000 + b"}",
+                        headers={"content-type": "application/json"})
+    assert r.status_code == 422
+    with app_client.websocket_connect("/ws") as ws:
+        ws.receive_json(), ws.receive_json()
+        ws.send_text('{"type": "seek", "time": 1' + "1" * 5000 + "}")
+        assert ws.receive_json()["type"] == "error"
+        ws.send_text('{"type": "params", "params": {"\\ud800": 1}}')
+        err = ws.receive_json()
+        assert err["type"] == "error" and err["detail"]
+        ws.send_json({"type": "speed", "speed": 2.0})
+        while True:
+            m = json.loads(ws.receive_text())
+            if m["type"] == "state":
+                assert m["speed"] == 2.0
+                break

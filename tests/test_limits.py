@@ -222,3 +222,10 @@ def test_transmittance_is_bounded(client):
     ok = {"layers": [{"kind": "particles", "count": 256}]}
     r = client.post("/api/transmittance", json={"params": ok, "rays": [dict(ray, time=float(t)) for t in range(16)]})
     assert r.status_code == 200 and len(r.json()["transmittance"]) == 16
+
+
+def test_a_tiny_still_whose_program_takes_long_to_compile_is_refused(client):
+    body = {"width": 16, "height": 16, "layers": [{"kind": "noise", "mode": "volume", "samples": 1}] * 16}
+    r = client.post("/api/still", json=body)
+    assert r.status_code == 422
+    assert r.json()["detail"][0]["type"] == "cost" and "compiling the fog program" in r.json()["detail"][0]["msg"]

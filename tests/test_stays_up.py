@@ -23,20 +23,7 @@ import pytest
 import websockets
 
 from fogbank import proctree
-from servers import Server, run_async
-
-HEAVY = {"width": 1920, "height": 1080, "layers": [{"kind": "noise", "mode": "volume", "samples": 128}]}
-
-
-def post_still(url: str, body: dict, timeout: float = 120):
-    req = urllib.request.Request(url + "/api/still?format=png", data=json.dumps(body).encode(),
-                                 headers={"Content-Type": "application/json"})
-    try:
-        with urllib.request.urlopen(req, timeout=timeout) as r:
-            return r.status, r.headers, r.read()
-    except urllib.error.HTTPError as e:
-        return e.code, e.headers, e.read()
-
+from servers import HEAVY, Server, post_still, run_async, watch_stream
 
 def get(url: str, timeout: float = 30) -> tuple[int, float, bytes]:
     t0 = time.monotonic()
@@ -45,22 +32,6 @@ def get(url: str, timeout: float = 30) -> tuple[int, float, bytes]:
             return r.status, time.monotonic() - t0, r.read()
     except urllib.error.HTTPError as e:
         return e.code, time.monotonic() - t0, e.read()
-
-
-async def count_frames(url: str, seconds: float) -> int:
-    async with websockets.connect(url.replace("http", "ws", 1) + "/ws?v=1&time=3") as ws:
-        await ws.recv(), await ws.recv()
-        await ws.send(json.dumps({"type": "view", "width": 320, "height": 180, "fps": 30}))
-        n, t0 = 0, time.monotonic()
-        while time.monotonic() - t0 < seconds:
-            try:
-                m = await asyncio.wait_for(ws.recv(), 1.0)
-            except asyncio.TimeoutError:
-                continue
-            if isinstance(m, bytes):
-                n += 1
-                await ws.send(json.dumps({"type": "ack", "frame": int.from_bytes(m[4:8], "little")}))
-        return n
 
 
 @pytest.fixture(scope="module")
@@ -80,7 +51,7 @@ def test_everyone_is_served_while_a_heavy_still_renders(server):
     health = [get(url + "/healthz") for _ in range(10)]
     metrics = get(url + "/metrics")
     small = get(url + "/api/still.jpg?width=320&height=180&time=11")
-    frames = run_async(count_frames(url, 3.0))
+    frames = run_async(watch_stream(url, 3.0))
     busy_for = time.monotonic() - t0
     t.join(120)
     status, _, png = result["r"]
@@ -121,7 +92,7 @@ def test_memory_of_the_process_tree_stays_within_budget():
     srv = Server(env={"FOGBANK_MAX_SESSIONS_PER_CLIENT": "64"}).start()   # 8 viewers from 127.0.0.1
     try:
         get(srv.url + "/api/still.jpg?width=1280&height=720")
-        run_async(count_frames(srv.url, 1.0))
+        run_async(watch_stream(srv.url, 1.0))
         warm = proctree.tree_rss_bytes(srv.proc.pid)
         for w in range(1280, 1300):
             assert get(srv.url + f"/api/still.jpg?width={w}&height=720", timeout=60)[0] == 200
@@ -129,27 +100,10 @@ def test_memory_of_the_process_tree_stays_within_budget():
 
         async def viewers():
             sizes = [(640, 360), (800, 450), (960, 540), (1280, 720), (1920, 1080)]
-
-            async def one(i):
-                w, h = sizes[i % len(sizes)]
-                async with websockets.connect(srv.url.replace("http", "ws", 1) + f"/ws?v=1&camera.yaw={i * 7}") as ws:
-                    await ws.recv(), await ws.recv()
-                    await ws.send(json.dumps({"type": "view", "width": w, "height": h}))
-                    t0 = time.monotonic()
-                    n = 0
-                    while time.monotonic() - t0 < 8:
-                        try:
-                            m = await asyncio.wait_for(ws.recv(), 1.0)
-                        except asyncio.TimeoutError:
-                            continue
-                        if isinstance(m, bytes):
-                            n += 1
-                            await ws.send(json.dumps({"type": "ack", "frame": int.from_bytes(m[4:8], "little")}))
-                            if n % 3 == 0:   # and the window is resized now and then
-                                w2, h2 = sizes[(i + n) % len(sizes)]
-                                await ws.send(json.dumps({"type": "view", "width": w2, "height": h2}))
-                    return n
-            return await asyncio.gather(*(one(i) for i in range(8)))
+            return await asyncio.gather(*(   # and each window is resized every third frame
+                watch_stream(srv.url, 8.0, sizes[i % 5], f"v=1&camera.yaw={i * 7}",
+                             resize=lambda n, i=i: sizes[(i + n) % 5] if n % 3 == 0 else None)
+                for i in range(8)))
         frames = run_async(viewers())
         after = proctree.tree_rss_bytes(srv.proc.pid)
         mb = 2 ** 20

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from urllib.parse import quote
+
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -109,3 +111,16 @@ def test_a_counted_layer_starts_homogeneous_and_refuses_fields_of_other_kinds():
     with pytest.raises(ValidationError) as exc:
         StillParams.model_validate(value)
     assert ("layers", 0, "homogeneous", "radius") in [tuple(e["loc"]) for e in exc.value.errors()]
+
+
+@pytest.mark.parametrize("text", ["１６", "1_6", " 16", "16 ", "١٢"])
+def test_url_numbers_are_ascii_only(text):
+    """Python's int() and float() read full-width and Arabic-Indic digits and underscores;
+    a look's URL must not have several spellings of one number."""
+    from pydantic import ValidationError
+
+    from fogbank.params import StillParams
+    value, _ = decode("width=" + quote(text), StillParams)
+    with pytest.raises(ValidationError) as exc:
+        StillParams.model_validate(value)
+    assert exc.value.errors()[0]["loc"] == ("width",)

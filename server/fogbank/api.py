@@ -23,6 +23,7 @@ from pydantic import BaseModel, Field, ValidationError, model_validator
 from . import STATIC_DIR, __version__, cost, metrics, openapi, worker
 from . import presets as P
 from .encode import MEDIA_TYPES
+from .layers import variant
 from .limits import RequestLimits
 from .params import FogParams, StillParams, Strict, Vec3
 from .security import SecurityHeaders, origin_allowed
@@ -66,12 +67,23 @@ class TransmittanceResponse(BaseModel):
     renderer: str
 
 
+def _safe(v):
+    """Text that can be sent as UTF-8: user strings may hold lone surrogates ('\\ud800'
+    from a JSON escape), which made the 422 itself fail with a 500."""
+    if isinstance(v, str):
+        return v.encode("utf-8", "backslashreplace").decode("utf-8")
+    return v
+
+
 def _clean(e: dict) -> dict:
     """A JSON-safe error: loc, msg, type, and the offending input when it is small."""
-    out = {"loc": list(e.get("loc", ())), "msg": str(e.get("msg", "")), "type": e.get("type", "")}
+    out = {"loc": [_safe(x) for x in e.get("loc", ())], "msg": _safe(str(e.get("msg", ""))),
+           "type": e.get("type", "")}
     v = e.get("input")
-    if isinstance(v, (int, str, bool)) and len(str(v)) <= 200:
+    if isinstance(v, bool) or (isinstance(v, int) and abs(v) < 10 ** 200):
         out["input"] = v
+    elif isinstance(v, str) and len(v) <= 200:
+        out["input"] = _safe(v)
     elif isinstance(v, float):
         out["input"] = v if math.isfinite(v) else str(v)
     return out
@@ -205,6 +217,18 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             return sup.interactive.least_loaded()
         return sup.batch.least_loaded()
 
+    def _route(still: StillParams, fmt: str):
+        """The worker for a still and its cost there: the interactive one when it is cheap
+        there (its fog program already compiled counts), else a batch one."""
+        sup: Supervisor = state["workers"]
+        key = variant(still)
+        fast = sup.interactive.least_loaded()
+        c = cost.estimate(still, fmt=fmt, scale=settings.cost_scale, compiled=key in fast.compiled)
+        if sup.batch is None or c.seconds <= settings.interactive_cost_s:
+            return fast, c
+        slot = sup.batch.least_loaded()
+        return slot, cost.estimate(still, fmt=fmt, scale=settings.cost_scale, compiled=key in slot.compiled)
+
     async def _still(still: StillParams, fmt: str, request: Request, loc: str) -> Response:
         info = state["workers"].info
         query = encode_url(still)
@@ -216,7 +240,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         cached = state["cache"].get(etag)
         if cached is not None:
             return Response(cached, media_type=MEDIA_TYPES[fmt], headers=headers)
-        c = cost.estimate(still, fmt=fmt, scale=settings.cost_scale)
+        slot, c = _route(still, fmt)
         refusal = _over_budget(c, settings, "this still")
         if refusal is not None:
             metrics.ERRORS.labels("cost").inc()
@@ -227,7 +251,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
                                 headers={"Retry-After": "2"})
         state["stills"] += 1
         try:
-            out = await _job(_slot_for(c.seconds), worker.still, still, fmt, deadline=settings.render_timeout_s)
+            out = await _job(slot, worker.still, still, fmt, deadline=settings.render_timeout_s)
+            slot.drew(variant(still))
         finally:
             state["stills"] -= 1
         metrics.STILLS.labels(fmt).inc()

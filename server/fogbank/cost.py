@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from .layers import variant
 from .params import Cosine, FogParams, Noise, Particles, StillParams
 from .renderer import GBUFFER_BPP, LINEAR_BPP, MSAA_BPP, OUT_BPP
 
@@ -30,6 +31,15 @@ COSINE_TERM_S_PER_MPX = 0.01
 NOISE_SAMPLE_S_PER_MPX = 0.022   # volume mode, per sample along the ray
 PARTICLE_S_PER_MPX = 0.0011      # one particle quad of radius 20 m, per megapixel
 PARTICLE_SIM_S = 0.5             # simulating 1024 particles of life 128 steps, once per time
+# llvmpipe compiles a fog program to machine code at its first draw, and that time grows
+# faster than the program: ~0.3 s for 11 height layers, 1.8 s for 16 cosine terms, 5.8 s
+# for 32, and for volume noise it doubles with each layer past about 10 (1.9 s for 12,
+# 7.8 s for 14, over 30 s for 16). Fitted by hand to those measurements (16x16 frames,
+# first draw minus second); charged only when the worker has not drawn that program yet.
+JIT_S_PER_UNIT = 0.03
+JIT_EXPONENT = 1.3
+JIT_COSINE_TERM_UNITS = 1.5
+JIT_NOISE_VOLUME_S = 0.95        # times 2 ** (volume noise layers - 11)
 
 
 @dataclass
@@ -54,12 +64,29 @@ def _layer_seconds(layer, fog_mpx: float) -> float:
     return s
 
 
+def jit_seconds(variant: tuple) -> float:
+    """Estimated first-draw compile time of the fog program for a layers.variant() key."""
+    units = 0.0
+    volume = 0
+    for kind, _wind, terms in variant:
+        if kind == "particles":
+            continue
+        units += JIT_COSINE_TERM_UNITS * terms if kind == "cosine" else 1.0
+        volume += kind == "noise/volume"
+    s = JIT_S_PER_UNIT * units ** JIT_EXPONENT
+    if volume > 8:
+        s += JIT_NOISE_VOLUME_S * 2.0 ** (volume - 11)
+    return s
+
+
 def particle_sim_seconds(layer: Particles) -> float:
     return PARTICLE_SIM_S * layer.count / 1024 * layer.life_max / 128
 
 
-def estimate(still: StillParams, msaa: bool = True, fmt: str = "jpg", scale: float = 1.0) -> Cost:
-    """Seconds and memory to render and encode `still` (`scale` multiplies seconds)."""
+def estimate(still: StillParams, msaa: bool = True, fmt: str = "jpg", scale: float = 1.0,
+             compiled: bool = False) -> Cost:
+    """Seconds and memory to render and encode `still` (`scale` multiplies seconds); the
+    fog program's first-draw compile is included unless `compiled`."""
     px = still.width * still.height
     mpx = px / 1e6
     e = still.effects
@@ -73,6 +100,9 @@ def estimate(still: StillParams, msaa: bool = True, fmt: str = "jpg", scale: flo
     for i, layer in enumerate(still.layers):
         if layer.enabled:
             parts[f"layers[{i}] ({_describe(layer)})"] = _layer_seconds(layer, fog_mpx)
+    if not compiled:
+        key = variant(still)
+        parts[f"compiling the fog program for {len(key)} layers (once per worker)"] = jit_seconds(key)
     memory = px * (OUT_BPP + GBUFFER_BPP + 3 + 4) + int(fog_mpx * 1e6) * 8
     if msaa:
         memory += px * MSAA_BPP

@@ -111,7 +111,7 @@ def parse(text: str | bytes) -> BaseModel:
                                   "type": "message_encoding"}]) from None
     try:
         data = json.loads(text)
-    except (json.JSONDecodeError, RecursionError) as exc:
+    except (ValueError, RecursionError) as exc:   # incl. integers over Python's 4300 digits
         raise ProtocolError([{"loc": ["message"], "msg": f"malformed JSON: {exc}",
                               "type": "json_invalid"}]) from None
     if not isinstance(data, dict):

@@ -35,7 +35,7 @@ class Settings(BaseSettings):
                                  "(render targets and cached scene passes), MiB")
     batch_cache_mb: int = Field(128, ge=16, le=65536, description="GL cache budget of each batch "
                                 "worker, MiB (stills rarely reuse a cached scene pass)")
-    worker_memory_mb: int = Field(1024, ge=128, le=262144, description="resident memory above which "
+    worker_memory_mb: int = Field(768, ge=128, le=262144, description="resident memory above which "
                                   "a worker frees its caches, and is replaced if still over, MiB")
     still_budget_s: float = Field(20.0, gt=0, le=3600, description="estimated render seconds a still "
                                   "may cost (on the reference machine, times cost_scale); beyond, 422")

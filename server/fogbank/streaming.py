@@ -19,6 +19,7 @@ a reason the page shows.
 from __future__ import annotations
 
 import asyncio
+import json
 import logging
 import time
 import uuid
@@ -28,6 +29,7 @@ from typing import Any
 from starlette.websockets import WebSocket, WebSocketDisconnect, WebSocketState
 
 from . import metrics, worker
+from .layers import variant
 from .protocol import (FLAG_FULL, FLAG_PLAYING, MAX_MESSAGE, PROTOCOL, ProtocolError, QueryMsg,
                        frame_header, parse)
 from .session import FrameJob, Session
@@ -51,8 +53,11 @@ class Client:
         self.unacked_since: float | None = None   # oldest frame sent and not yet acknowledged
 
     async def send_json(self, msg: dict[str, Any]) -> None:
+        # ASCII JSON: user text echoed in an error (a field name, a value) may hold lone
+        # surrogates, which cannot be encoded as UTF-8 and took the socket down
+        text = json.dumps(msg)
         async with self.send_lock:
-            await self.ws.send_json(msg)
+            await self.ws.send_text(text)
 
     async def send_bytes(self, data: bytes) -> None:
         async with self.send_lock:
@@ -153,6 +158,7 @@ class Streamer:
             try:
                 out = await self.workers.call(slot, worker.frame, job.still, s.id, job.msaa, job.quality,
                                               deadline=self.settings.frame_deadline_s)
+                slot.drew(variant(job.still))
             finally:
                 self.frames[slot.index] -= 1
                 self.wake()

@@ -67,6 +67,14 @@ class Slot:
     sessions: int = 0             # streaming sessions pinned here
     probing: bool = False
     started: float = field(default_factory=time.monotonic)
+    compiled: set = field(default_factory=set)   # fog program variants this worker has drawn
+
+    def drew(self, key: tuple) -> None:
+        """Remember a variant this worker compiled (a rough mirror of its program cache:
+        forgotten wholesale past 48, as the worker's cache evicts)."""
+        if len(self.compiled) >= 48:
+            self.compiled.clear()
+        self.compiled.add(key)
 
 
 class Lane:
@@ -97,6 +105,7 @@ class Lane:
         old = slot.pool
         slot.pool = self._pool()
         slot.pid = None
+        slot.compiled = set()
         slot.started = time.monotonic()
         metrics.WORKER_RESTARTS.labels(self.name, why).inc()
         log.info("worker recycled", extra={"lane": self.name, "worker": slot.index, "why": why})
@@ -196,6 +205,8 @@ class Supervisor:
                                    f"{queue_s + deadline:g} s", retry_after=5)
             out = waiter.result()
         except FutureTimeout:
+            slot.started = time.monotonic()   # pebble starts a new worker: give it time to start
+            slot.compiled = set()
             self.deadline_kills += 1
             metrics.DEADLINE_KILLS.labels(slot.lane).inc()
             metrics.WORKER_RESTARTS.labels(slot.lane, "deadline").inc()
@@ -204,6 +215,8 @@ class Supervisor:
                                "job": getattr(fn, "__name__", str(fn))})
             raise DeadlineExceeded(f"rendering took over {deadline:g} s and was stopped", retry_after=5) from None
         except ProcessExpired as exc:
+            slot.started = time.monotonic()
+            slot.compiled = set()
             metrics.WORKER_RESTARTS.labels(slot.lane, "died").inc()
             log.error("worker died during a job", extra={"lane": slot.lane, "worker": slot.index,
                                                          "error": str(exc)})

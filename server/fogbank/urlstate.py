@@ -33,6 +33,7 @@ VERSION = 1
 VIEW_KEYS = ("play", "speed")
 _SAFE = ",.-_~"
 _HEX = re.compile(r"^#[0-9a-f]{6}$")
+_NUMBER = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?|[+-]?(inf|nan|infinity)", re.I | re.A)
 MAX_QUERY = 16384
 MAX_LIST = 64
 
@@ -109,6 +110,8 @@ def _parse(ann: Any, text: str) -> Any:
         return text
     if ann is bool:
         return {"true": True, "1": True, "false": False, "0": False}.get(text.lower(), text)
+    if ann in (int, float) and not _NUMBER.fullmatch(text):
+        return text   # Python would read '１６', '1_6' or ' 16 ': a URL number is ASCII only
     if ann is int:
         try:
             return int(text)
