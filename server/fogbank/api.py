@@ -23,7 +23,6 @@ from pydantic import BaseModel, Field, ValidationError, model_validator
 from . import STATIC_DIR, __version__, cost, metrics, openapi, worker
 from . import presets as P
 from .encode import MEDIA_TYPES
-from .layers import variant
 from .limits import RequestLimits
 from .params import FogParams, StillParams, Strict, Vec3
 from .security import SecurityHeaders, origin_allowed
@@ -221,7 +220,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         """The worker for a still and its cost there: the interactive one when it is cheap
         there (its fog program already compiled counts), else a batch one."""
         sup: Supervisor = state["workers"]
-        key = variant(still)
+        key = cost.program_key(still)
         fast = sup.interactive.least_loaded()
         c = cost.estimate(still, fmt=fmt, scale=settings.cost_scale, compiled=key in fast.compiled)
         if sup.batch is None or c.seconds <= settings.interactive_cost_s:
@@ -252,7 +251,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         state["stills"] += 1
         try:
             out = await _job(slot, worker.still, still, fmt, deadline=settings.render_timeout_s)
-            slot.drew(variant(still))
+            slot.drew(cost.program_key(still))
         finally:
             state["stills"] -= 1
         metrics.STILLS.labels(fmt).inc()

@@ -64,6 +64,12 @@ def _layer_seconds(layer, fog_mpx: float) -> float:
     return s
 
 
+def program_key(still: StillParams) -> tuple:
+    """What a worker's compiled fog program depends on: the layers' variant and the fog
+    scale (a compile-time define)."""
+    return variant(still), still.effects.fog_scale
+
+
 def jit_seconds(variant: tuple) -> float:
     """Estimated first-draw compile time of the fog program for a layers.variant() key."""
     units = 0.0

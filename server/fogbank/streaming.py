@@ -28,8 +28,7 @@ from typing import Any
 
 from starlette.websockets import WebSocket, WebSocketDisconnect, WebSocketState
 
-from . import metrics, worker
-from .layers import variant
+from . import cost, metrics, worker
 from .protocol import (FLAG_FULL, FLAG_PLAYING, MAX_MESSAGE, PROTOCOL, ProtocolError, QueryMsg,
                        frame_header, parse)
 from .session import FrameJob, Session
@@ -158,7 +157,7 @@ class Streamer:
             try:
                 out = await self.workers.call(slot, worker.frame, job.still, s.id, job.msaa, job.quality,
                                               deadline=self.settings.frame_deadline_s)
-                slot.drew(variant(job.still))
+                slot.drew(cost.program_key(job.still))
             finally:
                 self.frames[slot.index] -= 1
                 self.wake()

@@ -27,6 +27,7 @@ from concurrent.futures import CancelledError as FutureCancelled
 from concurrent.futures.process import BrokenProcessPool
 from concurrent.futures import TimeoutError as FutureTimeout
 from dataclasses import dataclass, field
+from functools import lru_cache
 from typing import Any, Callable
 
 from pebble import ProcessExpired, ProcessPool
@@ -34,6 +35,15 @@ from pebble import ProcessExpired, ProcessPool
 from . import metrics, proctree, worker
 
 log = logging.getLogger("fogbank.workers")
+
+
+@lru_cache(maxsize=1)
+def warm_variant() -> tuple:
+    """The fog program every worker draws before its first job (worker._warm_up)."""
+    from .cost import program_key
+    from .params import StillParams
+    from .presets import preset_dict
+    return program_key(StillParams.model_validate(preset_dict("default")))
 
 
 class WorkerError(Exception):
@@ -67,13 +77,13 @@ class Slot:
     sessions: int = 0             # streaming sessions pinned here
     probing: bool = False
     started: float = field(default_factory=time.monotonic)
-    compiled: set = field(default_factory=set)   # fog program variants this worker has drawn
+    compiled: set = field(default_factory=lambda: {warm_variant()})   # fog programs it has drawn
 
     def drew(self, key: tuple) -> None:
         """Remember a variant this worker compiled (a rough mirror of its program cache:
         forgotten wholesale past 48, as the worker's cache evicts)."""
         if len(self.compiled) >= 48:
-            self.compiled.clear()
+            self.compiled = {warm_variant()}
         self.compiled.add(key)
 
 
@@ -105,7 +115,7 @@ class Lane:
         old = slot.pool
         slot.pool = self._pool()
         slot.pid = None
-        slot.compiled = set()
+        slot.compiled = {warm_variant()}
         slot.started = time.monotonic()
         metrics.WORKER_RESTARTS.labels(self.name, why).inc()
         log.info("worker recycled", extra={"lane": self.name, "worker": slot.index, "why": why})
@@ -206,7 +216,7 @@ class Supervisor:
             out = waiter.result()
         except FutureTimeout:
             slot.started = time.monotonic()   # pebble starts a new worker: give it time to start
-            slot.compiled = set()
+            slot.compiled = {warm_variant()}
             self.deadline_kills += 1
             metrics.DEADLINE_KILLS.labels(slot.lane).inc()
             metrics.WORKER_RESTARTS.labels(slot.lane, "deadline").inc()
@@ -216,7 +226,7 @@ class Supervisor:
             raise DeadlineExceeded(f"rendering took over {deadline:g} s and was stopped", retry_after=5) from None
         except ProcessExpired as exc:
             slot.started = time.monotonic()
-            slot.compiled = set()
+            slot.compiled = {warm_variant()}
             metrics.WORKER_RESTARTS.labels(slot.lane, "died").inc()
             log.error("worker died during a job", extra={"lane": slot.lane, "worker": slot.index,
                                                          "error": str(exc)})
