@@ -229,3 +229,13 @@ def test_a_tiny_still_whose_program_takes_long_to_compile_is_refused(client):
     r = client.post("/api/still", json=body)
     assert r.status_code == 422
     assert r.json()["detail"][0]["type"] == "cost" and "compiling the fog program" in r.json()["detail"][0]["msg"]
+
+
+def test_readyz_turns_to_draining_when_shutdown_begins():
+    """The server's SIGTERM handler calls app.state.drain() (cli.py) before uvicorn's own."""
+    with TestClient(create_app()) as c:
+        assert c.get("/readyz").json()["status"] == "ready"
+        c.app.state.drain()
+        r = c.get("/readyz")
+        assert (r.status_code, r.json()["status"]) == (503, "draining")
+        assert c.get("/healthz").status_code == 200          # alive, just not taking work
