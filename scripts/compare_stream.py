@@ -11,34 +11,16 @@ PYTHONPATH pointing at its `server/` folder."""
 from __future__ import annotations
 
 import asyncio
-import os
-import socket
 import statistics
-import subprocess
 import sys
-import time
-import urllib.request
 
 from fogbank.bench_stream import delivered_fps
+from fogbank.child import ChildServer
 
 
-def start(pythonpath: str | None, env: dict) -> tuple[subprocess.Popen, str]:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port = s.getsockname()[1]
-    e = {**os.environ, "FOGBANK_MAX_SESSIONS_PER_CLIENT": "1000", **env}
-    if pythonpath:
-        e["PYTHONPATH"] = pythonpath
-    p = subprocess.Popen([sys.executable, "-m", "fogbank.cli", "serve", "--host", "127.0.0.1", "--port", str(port)],
-                         env=e, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    url = f"http://127.0.0.1:{port}"
-    for _ in range(600):
-        try:
-            urllib.request.urlopen(url + "/healthz", timeout=1)
-            break
-        except OSError:
-            time.sleep(0.2)
-    return p, url
+def start(pythonpath: str | None, env: dict) -> ChildServer:
+    """A server on 127.0.0.1 from this checkout, or from `pythonpath` (an older one)."""
+    return ChildServer(timeout=120, env={**env, **({"PYTHONPATH": pythonpath} if pythonpath else {})})
 
 
 def main() -> None:
@@ -50,17 +32,16 @@ def main() -> None:
     res: dict = {}
     for rnd in range(rounds):
         for name, pp, env in configs:
-            p, url = start(pp, env)
+            srv = start(pp, env)
             try:
-                ws = url.replace("http", "ws", 1)
+                ws = srv.url.replace("http", "ws", 1)
                 asyncio.run(delivered_fps(ws, "v=1", 640, 360, seconds=3))   # warm
                 for orbit in (False, True):
                     r = asyncio.run(delivered_fps(ws, "v=1", 640, 360, seconds=seconds, orbit=orbit))
                     res.setdefault((name, orbit), []).append(r["fps"])
                     print(f"round {rnd} {name:28s} {'orbit' if orbit else 'still'} {r['fps']:6.1f} fps", flush=True)
             finally:
-                p.terminate()
-                p.wait(60)
+                srv.stop()
     for orbit in (False, True):
         base = statistics.median(res[("before", orbit)])
         for name, _, _ in configs:

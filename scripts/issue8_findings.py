@@ -14,7 +14,7 @@ from fogbank import proctree
 import websockets
 
 MB = 2**20
-def tree(p): return round(proctree.tree_rss_bytes(p.pid) / MB)
+def tree(srv): return round(proctree.tree_rss_bytes(srv.proc.pid) / MB)
 
 def get(url, timeout=120):
     t0 = time.monotonic()
@@ -83,10 +83,11 @@ async def flood(url):
 
 if __name__ == "__main__":
     for name, pp in (("before", sys.argv[1]), ("after", None)):
-        p, url = start(pp, {})
+        srv = start(pp, {})
+        p, url = srv, srv.url
         try:
             res = {"leak": leak(p, url), "freeze": freeze(url), "transmittance": transmittance(url),
                    "body_100mb": body100(p, url), "flood_5000_error_replies": asyncio.run(flood(url))}
             print(name, json.dumps(res), flush=True)
         finally:
-            p.terminate(); p.wait(60)
+            srv.stop()

@@ -16,14 +16,14 @@ from . import proctree
 
 
 class ChildServer:
-    def __init__(self, timeout: float = 60.0):
+    def __init__(self, timeout: float = 60.0, env: dict | None = None):
         with socket.socket() as s:
             s.bind(("127.0.0.1", 0))
             self.port = s.getsockname()[1]
         self.url = f"http://127.0.0.1:{self.port}"
         self.log = tempfile.NamedTemporaryFile(prefix="fogbank-child-", suffix=".log", delete=False)
         # every load client comes from 127.0.0.1: lift the per-address session cap
-        env = {**os.environ, "FOGBANK_MAX_SESSIONS_PER_CLIENT": "1000"}
+        env = {**os.environ, "FOGBANK_MAX_SESSIONS_PER_CLIENT": "1000", **(env or {})}
         self.proc = subprocess.Popen([sys.executable, "-m", "fogbank.cli", "serve", "--host", "127.0.0.1",
                                       "--port", str(self.port)], stdout=self.log, stderr=subprocess.STDOUT, env=env)
         deadline = time.monotonic() + timeout

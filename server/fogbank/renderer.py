@@ -143,7 +143,6 @@ class Renderer:
         self._noise: dict[tuple, moderngl.Texture] = {}
         self._rays_fbo: tuple | None = None
         self._sim_cache: OrderedDict = OrderedDict()
-        self._probe_fbo: moderngl.Framebuffer | None = None
         self._park_fbo: moderngl.Framebuffer | None = None
 
     # ------------------------------------------------------------ programs
@@ -202,13 +201,11 @@ class Renderer:
         return {"renderer": i["GL_RENDERER"], "version": i["GL_VERSION"], "vendor": i["GL_VENDOR"]}
 
     def probe(self) -> bool:
-        """Clear a 2x2 target to a known colour and read it back (a liveness probe that
+        """Clear a 1x1 target to a known colour and read it back (a liveness probe that
         goes through the GL pipeline, not just the Python side)."""
-        if self._probe_fbo is None:
-            self._probe_fbo = self.ctx.framebuffer(color_attachments=[self.ctx.renderbuffer((2, 2), 4)])
-        self._probe_fbo.use()
-        self._probe_fbo.clear(0.2, 0.4, 0.6, 1.0)
-        px = self._probe_fbo.read(components=4, alignment=1)
+        self._park()   # the never-released 1x1 framebuffer serves as the probe's target
+        self._park_fbo.clear(0.2, 0.4, 0.6, 1.0)
+        px = self._park_fbo.read(components=4, alignment=1)
         return px[:4] == bytes((51, 102, 153, 255))
 
     # ------------------------------------------------------------ resources

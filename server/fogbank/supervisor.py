@@ -143,7 +143,6 @@ class Supervisor:
         self.interactive = Lane("interactive", s.workers, self, nice=0)
         self.batch = Lane("batch", s.batch_workers, self, nice=s.batch_nice) if s.batch_workers else None
         self.info: dict[str, str] = {}
-        self.deadline_kills = 0
         self._probe_task: asyncio.Task | None = None
         self.draining = False
 
@@ -217,7 +216,6 @@ class Supervisor:
         except FutureTimeout:
             slot.started = time.monotonic()   # pebble starts a new worker: give it time to start
             slot.compiled = {warm_variant()}
-            self.deadline_kills += 1
             metrics.DEADLINE_KILLS.labels(slot.lane).inc()
             metrics.WORKER_RESTARTS.labels(slot.lane, "deadline").inc()
             log.warning("job past its deadline; worker killed",

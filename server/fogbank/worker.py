@@ -23,14 +23,15 @@ from typing import Any
 
 import numpy as np
 
+from . import proctree
+
 _renderer = None
 _config: dict[str, Any] = {}
 
 
 def rss_bytes() -> int:
     """This process's resident set size."""
-    with open("/proc/self/statm") as f:
-        return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+    return proctree.rss_bytes(os.getpid())
 
 
 M_MMAP_THRESHOLD = -3
