@@ -24,7 +24,7 @@ from . import STATIC_DIR, __version__, cost, metrics, openapi, worker
 from . import presets as P
 from .encode import MEDIA_TYPES
 from .limits import RequestLimits
-from .params import FogParams, StillParams, Strict, Vec3
+from .params import RAY_LIMIT, Direction, FogParams, Position, StillParams, Strict
 from .security import SecurityHeaders, origin_allowed
 from .supervisor import Supervisor, WorkerError
 from .settings import Settings, get_settings
@@ -39,10 +39,10 @@ MAX_RAY_TIMES = 16   # distinct ray times per request (each simulates the partic
 
 
 class Ray(Strict):
-    origin: Vec3 = Field(description="m")
-    direction: Vec3 = Field(description="normalised by the server; not all zero",
+    origin: Position = Field(description="m, each axis within the scene's position limit")
+    direction: Direction = Field(description="normalised by the server; not all zero",
                             json_schema_extra={"contains": {"not": {"const": 0}}})
-    length: float = Field(ge=0, le=1e6, strict=True, description="m")
+    length: float = Field(ge=0, le=RAY_LIMIT, strict=True, description="m")
     time: float = Field(0.0, ge=0, le=1e6, strict=True, description="s")
 
 

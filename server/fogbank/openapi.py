@@ -62,7 +62,10 @@ def query_parameters() -> list[dict[str, Any]]:
                              "description": s.get("description", "")}
         if s.get("type") == "array":
             items = s.get("items") or (s.get("prefixItems") or [{"type": "number"}])[0]
-            schema = {"type": "array", "items": {"type": items.get("type", "number")}}
+            # the items' own bounds (a position's +-POSITION_LIMIT) come along
+            schema = {"type": "array", "items": {k: v for k, v in items.items() if k in (
+                "type", "minimum", "maximum", "exclusiveMinimum", "exclusiveMaximum")}}
+            schema["items"].setdefault("type", "number")
             for k in ("minItems", "maxItems"):
                 if k in s:
                     schema[k] = s[k]

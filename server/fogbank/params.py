@@ -64,7 +64,19 @@ def _integral(v: Any) -> Any:
 
 Int = Annotated[int, BeforeValidator(_integral), Field(strict=True)]
 Bool = Annotated[bool, Field(strict=True)]     # true or false: not 0/1, not "yes"
-Vec3 = tuple[Num, Num, Num]
+# The domain where the accuracy contract holds (docs/accuracy.md): every position in the
+# scene (eye, ray origin, centre, emitter) within +-POSITION_LIMIT m on each axis, every
+# ray at most RAY_LIMIT m long. Beyond them float32 cannot place a point to the
+# millimetre the contract needs, so the schema refuses them (422 naming the field).
+POSITION_LIMIT = 10_000.0
+RAY_LIMIT = 100_000.0
+Coord = Annotated[float, Field(strict=True, ge=-POSITION_LIMIT, le=POSITION_LIMIT)]
+Position = tuple[Coord, Coord, Coord]
+# a direction or a wave vector: any non-degenerate finite vector, bounded so that its
+# float32 square (for normalising) stays finite
+Comp = Annotated[float, Field(strict=True, ge=-1e6, le=1e6)]
+Direction = tuple[Comp, Comp, Comp]
+Wave = Annotated[float, Field(strict=True, ge=-1000, le=1000)]   # a wave vector's component
 
 
 def srgb_to_linear(c: str) -> tuple[float, float, float]:
@@ -84,7 +96,7 @@ class Strict(BaseModel):
 
 
 class Camera(Strict):
-    position: Vec3 = Field((-60.0, 22.0, 95.0), description="eye position, m")
+    position: Position = Field((-60.0, 22.0, 95.0), description=f"eye position, m (each axis within +-{POSITION_LIMIT:g})")
     yaw: float = num(-35.0, -360, 360, 0.5, "deg", "heading; 0 looks along -z, positive turns right")
     pitch: float = num(-8.0, -89, 89, 0.5, "deg", "up/down; positive looks up")
     fov: float = num(55.0, 10, 120, 1, "deg", "vertical field of view")
@@ -143,7 +155,7 @@ class Height(LayerBase):
 
 class CosineTerm(Strict):
     amp: float = num(0.5, -10, 10, 0.01, "", "amplitude c_i")
-    k: Vec3 = Field((0.0, 1.0, 0.0), description="wave vector, rad per function unit")
+    k: tuple[Wave, Wave, Wave] = Field((0.0, 1.0, 0.0), description="wave vector, rad per function unit")
     phase: float = num(0.0, -1000, 1000, 0.01, "rad", "phase phi_i")
 
 
@@ -185,7 +197,7 @@ class Polynomial(LayerBase):
     coeffs: list[Num] = Field([0.8, -1.0, 0.0, 0.0, 1.0], min_length=1,
                                 max_length=MAX_POLY_COEFFS,
                                 description="P(u) = sum coeffs[i] u^i (ascending powers)")
-    axis: Vec3 = Field((1.0 / 60.0, 0.0, 0.0), description="u = axis . x + offset, 1/m")
+    axis: tuple[Wave, Wave, Wave] = Field((1.0 / 60.0, 0.0, 0.0), description="u = axis . x + offset, 1/m")
     offset: float = num(0.0, -1000, 1000, 0.01, "", "added to u")
     half_width: float = num(1.0, 1e-3, 1000, 0.01, "", "C: P is defined on [-C, C]", gt=True)
     mode: Literal["repeat", "zero"] = Field("repeat", description="outside [-C, C]: tile or zero")
@@ -206,8 +218,8 @@ class Potential(LayerBase):
     """Biri 3.2.3, eq. 9: strength / (c + e r^2), r the distance to a point or a line."""
     kind: Literal["potential"] = "potential"
     shape: Literal["point", "line"] = "point"
-    center: Vec3 = Field((0.0, 5.0, 0.0), description="the point, or a point on the line, m")
-    direction: Vec3 = Field((0.0, 1.0, 0.0), description="the line's direction (unused for a point)")
+    center: Position = Field((0.0, 5.0, 0.0), description="the point, or a point on the line, m")
+    direction: Direction = Field((0.0, 1.0, 0.0), description="the line's direction (unused for a point)")
     strength: float = num(1.0, 0, 1000, 0.01, "1/m", "numerator a")
     c: float = num(20.0, 1e-3, 1e6, 0.1, "", "constant term c > 0", gt=True)
     e: float = num(1.0, 1e-6, 1e3, 0.01, "1/m^2", "r^2 weight e > 0", gt=True)
@@ -222,7 +234,7 @@ class Potential(LayerBase):
 class Sphere(LayerBase):
     """Quilez: density * max(0, 1 - |x - center|^2 / radius^2)."""
     kind: Literal["sphere"] = "sphere"
-    center: Vec3 = Field((0.0, 8.0, 0.0), description="m")
+    center: Position = Field((0.0, 8.0, 0.0), description="m")
     radius: float = num(15.0, 0.01, 1000, 0.1, "m", "", gt=True)
     density: float = num(0.1, 0, 10, 0.001, "1/m", "density at the centre")
 
@@ -231,8 +243,8 @@ class Particles(LayerBase):
     """Fischer: a few free-floating particles; T = prod (1 - alpha s_j clamp(1 - dist_j/R, 0, 1))."""
     kind: Literal["particles"] = "particles"
     count: Int = Field(120, ge=1, le=MAX_PARTICLES, description="particles alive at once (slots)")
-    emitter: Vec3 = Field((10.0, 2.0, 0.0), description="where particles are born, m")
-    direction: Vec3 = Field((0.0, 1.0, 0.0), description="mean launch direction")
+    emitter: Position = Field((10.0, 2.0, 0.0), description="where particles are born, m")
+    direction: Direction = Field((0.0, 1.0, 0.0), description="mean launch direction")
     spread: float = num(25.0, 0, 180, 1, "deg", "cone half-angle around direction")
     speed: float = num(1.5, 0, 50, 0.1, "m/s", "launch speed")
     life_min: Int = Field(64, ge=1, le=1000, description="shortest life, steps")
@@ -259,7 +271,8 @@ class Noise(LayerBase):
     scale: float = num(60.0, 0.1, 10000, 0.5, "m", "size of one noise tile", gt=True)
     height_falloff: Bool = Field(True, description="surface mode: n * dY^2 / 2 + 0.001 (write-up)")
     falloff_scale: float = num(10.0, 0.01, 1000, 0.1, "m", "dY is measured in these units", gt=True)
-    samples: Int = Field(16, ge=1, le=128, description="volume mode: samples along the ray")
+    samples: Int = Field(16, ge=1, le=128, description="volume mode: most samples per ray; each ray "
+                                                       "takes what its error bound needs, up to this")
 
 
 class Distance(LayerBase):
