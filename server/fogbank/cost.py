@@ -74,7 +74,7 @@ def jit_seconds(variant: tuple) -> float:
     """Estimated first-draw compile time of the fog program for a layers.variant() key."""
     units = 0.0
     volume = 0
-    for kind, _wind, terms in variant:
+    for kind, terms in variant:
         if kind == "particles":
             continue
         units += JIT_COSINE_TERM_UNITS * terms if kind == "cosine" else 1.0

@@ -4,7 +4,8 @@ the GLSL that calls each layer's function (fog/layers.gen.glsl).
 One layer is LAYER_VEC4 vec4s of uLayer; `_CODE` below gives each kind's slots. Particle
 positions go to a texture. The generated code depends only on `variant(fog)` (the kinds,
 their wind flags and term counts), so one compiled program serves every value of the
-parameters; the renderer caches programs by that key.
+parameters; the renderer caches programs by that key. Positions, phases and tile offsets
+are packed relative to a reference point (the eye) and slid by the wind in float64 here.
 """
 
 from __future__ import annotations
@@ -17,42 +18,48 @@ from .params import (MAX_LAYERS, MAX_PARTICLES, Cosine, Distance, FogParams, Hei
 
 LAYER_VEC4 = 12
 DEFINES = {"MAX_LAYERS": MAX_LAYERS, "LAYER_VEC4": LAYER_VEC4}
+LOG_ZERO = -1e30   # log of a zero density: exp() of it is 0 in float32
 
 
-# GLSL per kind; {b} is the layer's first uLayer index, {O} the (slid) eye point.
+# GLSL per kind; {b} is the layer's first uLayer index. Every position, phase and tile
+# offset in uLayer is relative to the reference point E and slid by wind * time already
+# (see pack), so the calls take the segment start Os and end P relative to E as they are.
 _CODE = {
     # p0 = (density)
     "homogeneous": "tau += homogeneousOpticalDepth(uLayer[{b}].x, ds);",
-    # p0 = (density, falloff, base)
-    "height": "tau += heightOpticalDepth({O}, w, ds, uLayer[{b}].x, uLayer[{b}].y, uLayer[{b}].z);",
-    # p0 = (axis, offset); p1 = (density, C, repeat, period); p2, p3 coefficients; p4, p5 Q
-    "polynomial": "tau += uLayer[{b1}].x * polynomialOpticalDepth({O}, w, ds, uLayer[{b}].xyz, "
+    # p0 = (log density at E's height, hi and lo, falloff)
+    "height": "tau += heightOpticalDepth(Os, w, ds, uLayer[{b}].xy, uLayer[{b}].z);",
+    # p0 = (axis, u at E reduced to [-C, C)); p1 = (density, C, repeat, period);
+    # p2, p3 coefficients; p4, p5 coefficients / (i + 1)
+    "polynomial": "tau += uLayer[{b1}].x * polynomialOpticalDepth(Os, w, ds, uLayer[{b}].xyz, "
                   "uLayer[{b}].w, uLayer[{b1}].y, uLayer[{b1}].z > 0.5, uLayer[{b1}].w, "
-                  "uLayer[{b2}], uLayer[{b3}], uLayer[{b4}], uLayer[{b5}]);",
-    # p0 = (center, strength); p1 = (unit axis or 0, c); p2.x = e
-    "potential": "tau += potentialOpticalDepth({O}, w, ds, uLayer[{b}].xyz, uLayer[{b1}].xyz, "
+                  "uLayer[{b4}], uLayer[{b5}]);",
+    # p0 = (center - E, strength); p1 = (unit axis or 0, c); p2.x = e
+    "potential": "tau += potentialOpticalDepth(Os, w, ds, uLayer[{b}].xyz, uLayer[{b1}].xyz, "
                  "uLayer[{b}].w, uLayer[{b1}].w, uLayer[{b2}].x);",
-    # p0 = (center, radius); p1.x = density
-    "sphere": "tau += sphereOpticalDepth({O}, w, ds, uLayer[{b}].xyz, uLayer[{b}].w, uLayer[{b1}].x);",
-    # p0 = (alpha, radius, first particle, count)
+    # p0 = (center - E, radius); p1.x = density
+    "sphere": "tau += sphereOpticalDepth(Os, w, ds, uLayer[{b}].xyz, uLayer[{b}].w, uLayer[{b1}].x);",
+    # p0 = (alpha, radius, first particle, count); particle positions relative to E
     "particles": "for (int j = 0; j < int(uLayer[{b}].w); ++j) {{ "
                  "vec4 q = texelFetch(uParticles, ivec2(int(uLayer[{b}].z) + j, 0), 0); "
-                 "T *= particleClarity(Os, w, ds, q.xyz, uLayer[{b}].y, q.w, uLayer[{b}].x); }}",
-    # p0 = (density, 1/scale, -, samples); p1 = (falloff flag, 1/falloff scale)
-    "noise/surface": "tau += noiseSurfaceOpticalDepth(uNoise, Os, P, P - ({S}), ds, uLayer[{b}].x, "
-                     "uLayer[{b}].y, uLayer[{b1}].x > 0.5, uLayer[{b1}].y);",
-    "noise/volume": "tau += noiseVolumeOpticalDepth(uNoise, {O}, w, ds, uLayer[{b}].x, uLayer[{b}].y, "
-                    "int(uLayer[{b}].w));",
-    # p0 = (start, 1/D, exponent, max); p1 = (low, high, 1/noise scale)
-    "distance": "T *= distanceTransmittance(ds, noiseSample(uNoise, P - ({S}), uLayer[{b1}].z), "
-                "uLayer[{b}].x, uLayer[{b}].y, uLayer[{b}].z, uLayer[{b}].w, uLayer[{b1}].x, "
-                "uLayer[{b1}].y);",
+                 "tau -= uDensity * log1mx(particleOpacity(Os, w, ds, q.xyz, uLayer[{b}].y, q.w, "
+                 "uLayer[{b}].x)); }}",
+    # p0 = (density, 1/scale, -, max samples); p1 = (falloff flag, 1/falloff scale);
+    # p2 = E in tiles mod 1; p3 = largest texel steps along x, y, z
+    "noise/surface": "tau += noiseSurfaceOpticalDepth(uNoise, Os, P, ds, uLayer[{b}].x, "
+                     "uLayer[{b}].y, uLayer[{b2}].xyz, uLayer[{b1}].x > 0.5, uLayer[{b1}].y);",
+    "noise/volume": "tau += noiseVolumeOpticalDepth(uNoise, Os, w, ds, uLayer[{b}].x, uLayer[{b}].y, "
+                    "uLayer[{b2}].xyz, uLayer[{b3}].xyz, int(uLayer[{b}].w));",
+    # p0 = (start, 1/D, exponent, max); p1 = (low, high, 1/noise scale); p2 = E in tiles mod 1
+    "distance": "tau -= uDensity * log1mx(distanceFogAmount(ds, noiseSample(uNoise, P, uLayer[{b1}].z, "
+                "uLayer[{b2}].xyz), uLayer[{b}].x, uLayer[{b}].y, uLayer[{b}].z, uLayer[{b}].w, "
+                "uLayer[{b1}].x, uLayer[{b1}].y));",
 }
 
 
 def variant(fog: FogParams) -> tuple:
     """What the generated GLSL depends on: per enabled layer, its kind (with the noise
-    mode), its wind flag, and its number of cosine terms. Particle layers keep their
+    mode) and its number of cosine terms (the wind slide is packed, not generated). Particle layers keep their
     slot (their data is packed there) whether or not the shader loops over them."""
     key = []
     for layer in fog.layers:
@@ -60,7 +67,7 @@ def variant(fog: FogParams) -> tuple:
             continue
         kind = f"noise/{layer.mode}" if isinstance(layer, Noise) else layer.kind
         terms = len(layer.terms) if isinstance(layer, Cosine) else 0
-        key.append((kind, layer.wind, terms))
+        key.append((kind, terms))
     return tuple(key)
 
 
@@ -68,18 +75,16 @@ def layer_code(key: tuple, inline_particles: bool = True) -> str:
     """The body of fog/layers.gen.glsl for a variant key. With inline_particles False,
     particle layers are left to the particle quads pass (passes/particles.*)."""
     lines = []
-    for i, (kind, wind, terms) in enumerate(key):
+    for i, (kind, terms) in enumerate(key):
         if kind == "particles" and not inline_particles:
             lines.append(f"// layer {i}: particles, drawn as quads")
             continue
         b = i * LAYER_VEC4
-        S = "slide" if wind else "vec3(0.0)"
-        O = "(Os - slide)" if wind else "Os"
         idx = {f"b{k}": b + k for k in range(1, LAYER_VEC4)}
-        lines.append(f"// layer {i}: {kind}{' (wind)' if wind else ''}")
+        lines.append(f"// layer {i}: {kind}")
         if kind == "cosine":
-            # p0 = (density, c0, 1/scale, -); uLayer[b+1+j] = (k_j, phase_j); amps at b+9, b+10
-            body = [f"float acc = uLayer[{b}].y * ds;", f"vec3 Ou = {O} * uLayer[{b}].z;",
+            # p0 = (density, c0, 1/scale, -); uLayer[b+1+j] = (k_j, phase at E); amps at b+9, b+10
+            body = [f"float acc = uLayer[{b}].y * ds;", f"vec3 Ou = Os * uLayer[{b}].z;",
                     f"vec3 wu = w * uLayer[{b}].z;"]
             for j in range(terms):
                 body.append(f"acc += cosineTermOpticalDepth(Ou, wu, ds, uLayer[{b + 1 + j}].xyz, "
@@ -87,19 +92,19 @@ def layer_code(key: tuple, inline_particles: bool = True) -> str:
             body.append(f"tau += uLayer[{b}].x * acc;")
             lines.append("{ " + " ".join(body) + " }")
         else:
-            lines.append(_CODE[kind].format(b=b, O=O, S=S, **idx))
+            lines.append(_CODE[kind].format(b=b, **idx))
     return "\n".join(lines) + "\n"
 
 
-# The density at x of each exponential kind, for the raymarched comparison ({X}: x slid).
+# The density at x of each exponential kind, for the raymarched comparison (x relative to E).
 _DENSITY = {
     "homogeneous": "rho += homogeneousDensity(uLayer[{b}].x);",
-    "height": "rho += heightDensity({X}, uLayer[{b}].x, uLayer[{b}].y, uLayer[{b}].z);",
-    "polynomial": "rho += uLayer[{b1}].x * polynomialDensity({X}, uLayer[{b}].xyz, uLayer[{b}].w, "
+    "height": "rho += heightDensity(x, uLayer[{b}].xy, uLayer[{b}].z);",
+    "polynomial": "rho += uLayer[{b1}].x * polynomialDensity(x, uLayer[{b}].xyz, uLayer[{b}].w, "
                   "uLayer[{b1}].y, uLayer[{b1}].z > 0.5, uLayer[{b2}], uLayer[{b3}]);",
-    "potential": "rho += potentialDensity({X}, uLayer[{b}].xyz, uLayer[{b1}].xyz, uLayer[{b}].w, "
+    "potential": "rho += potentialDensity(x, uLayer[{b}].xyz, uLayer[{b1}].xyz, uLayer[{b}].w, "
                  "uLayer[{b1}].w, uLayer[{b2}].x);",
-    "sphere": "rho += sphereDensity({X}, uLayer[{b}].xyz, uLayer[{b}].w, uLayer[{b1}].x);",
+    "sphere": "rho += sphereDensity(x, uLayer[{b}].xyz, uLayer[{b}].w, uLayer[{b1}].x);",
 }
 
 
@@ -107,25 +112,61 @@ def density_code(key: tuple) -> str:
     """The body of fog/density.gen.glsl (used only when RAYMARCH_STEPS is defined): the
     summed density at x of the exponential layers in `key`."""
     lines = []
-    for i, (kind, wind, terms) in enumerate(key):
+    for i, (kind, terms) in enumerate(key):
         b = i * LAYER_VEC4
-        X = "(x - slide)" if wind else "x"
         idx = {f"b{k}": b + k for k in range(1, LAYER_VEC4)}
         if kind == "cosine":
-            t = " + ".join(f"cosineTermDensity({X} * uLayer[{b}].z, uLayer[{b + 1 + j}].xyz, "
+            t = " + ".join(f"cosineTermDensity(x * uLayer[{b}].z, uLayer[{b + 1 + j}].xyz, "
                            f"uLayer[{b + 1 + j}].w, uLayer[{b + 9 + j // 4}][{j % 4}])"
                            for j in range(terms)) or "0.0"
             lines.append(f"rho += uLayer[{b}].x * (uLayer[{b}].y + {t});")
         elif kind in _DENSITY:
-            lines.append(_DENSITY[kind].format(b=b, X=X, **idx))
+            lines.append(_DENSITY[kind].format(b=b, **idx))
         else:
             lines.append(f"// layer {i}: {kind} has no raymarched form")
     return "\n".join(lines) + "\n"
 
 
-def pack(fog: FogParams, particle_states: dict[int, tuple[np.ndarray, np.ndarray]]):
+FLT_MIN = float(np.finfo(np.float32).tiny)
+
+
+def direct_density(fog: FogParams) -> float:
+    """uDensity, the weight of the direct transmittances' logarithms (T_j^density =
+    exp(density log T_j)): a positive density too small for float32 is sent as its
+    smallest normal number (T^tiny is 1, or 0 where T is 0)."""
+    return max(fog.density, FLT_MIN) if fog.density > 0 else 0.0
+
+
+def _slide(layer, fog: FogParams, time: float) -> np.ndarray:
+    """DESIGN: a wind-sensitive density rho(x) becomes rho(x - wind * time)."""
+    return fog.wind.vector() * time if layer.wind else np.zeros(3)
+
+
+def _wrap_angle(x: float) -> float:
+    """x reduced to [-pi, pi) in float64."""
+    return float(x - 2 * np.pi * np.floor(x / (2 * np.pi) + 0.5))
+
+
+def split(x: float) -> tuple[float, float]:
+    """x as float32 hi + lo, hi + lo = x to ~1e-14 relative."""
+    hi = float(np.float32(x))
+    return hi, float(np.float32(x - hi))
+
+
+def pack(fog: FogParams, particle_states: dict[int, tuple[np.ndarray, np.ndarray]],
+         ref=(0.0, 0.0, 0.0), time: float = 0.0):
     """Returns (uLayer data float32 (MAX_LAYERS*LAYER_VEC4, 4), particles float32
-    (MAX_PARTICLES, 4)) for the enabled layers, in the order of `variant(fog)`."""
+    (MAX_PARTICLES, 4)) for the enabled layers, in the order of `variant(fog)`.
+
+    Everything that depends on where or when is taken here in float64, relative to the
+    reference point `ref` (the eye of a frame, the origin of a group of rays) and slid by
+    wind * `time`: centres become offsets from ref, phases and tile offsets are reduced to
+    one period. The shader then works near 0, where float32 is at its finest, whatever the
+    eye's distance from the origin or the time (docs/accuracy.md). The global density
+    multiplies every exponential layer's density here (into the logarithm for height fog),
+    so that a tiny global density over a huge optical depth is not lost to float32."""
+    E = np.asarray(ref, dtype=np.float64)
+    g = fog.density   # the global density scales every optical depth: folded in here, in float64
     data = np.zeros((MAX_LAYERS * LAYER_VEC4, 4), np.float64)
     parts = np.zeros((MAX_PARTICLES, 4), np.float64)
     n = 0
@@ -134,14 +175,17 @@ def pack(fog: FogParams, particle_states: dict[int, tuple[np.ndarray, np.ndarray
         if not layer.enabled:
             continue
         v = data[n * LAYER_VEC4:(n + 1) * LAYER_VEC4]
+        Es = E - _slide(layer, fog, time)   # E in the layer's own (unslid) frame
         if isinstance(layer, Homogeneous):
-            v[0, 0] = layer.density
+            v[0, 0] = g * layer.density
         elif isinstance(layer, Height):
-            v[0, :3] = (layer.density, layer.falloff, layer.base)
+            log_rho = np.log(layer.density) + np.log(g) if layer.density > 0 and g > 0 else LOG_ZERO
+            v[0, :2] = split(log_rho - layer.falloff * (Es[1] - layer.base))
+            v[0, 2] = layer.falloff
         elif isinstance(layer, Cosine):
-            v[0, :3] = (layer.density, layer.c0, 1.0 / layer.scale)
+            v[0, :3] = (g * layer.density, layer.c0, 1.0 / layer.scale)
             for j, t in enumerate(layer.terms):
-                v[1 + j] = (*t.k, t.phase)
+                v[1 + j] = (*t.k, _wrap_angle(np.dot(t.k, Es) / layer.scale + t.phase))
                 v[9 + j // 4, j % 4] = t.amp
         elif isinstance(layer, Polynomial):
             C = layer.half_width
@@ -149,8 +193,11 @@ def pack(fog: FogParams, particle_states: dict[int, tuple[np.ndarray, np.ndarray
             c[:len(layer.coeffs)] = layer.coeffs
             Q = npoly.polyint(c)  # Q[0] = 0, Q[i+1] = c_i / (i + 1)
             period = npoly.polyval(C, Q) - npoly.polyval(-C, Q)
-            v[0] = (*layer.axis, layer.offset)
-            v[1] = (layer.density, C, 1.0 if layer.mode == "repeat" else 0.0, period)
+            u0 = float(np.dot(layer.axis, Es) + layer.offset)
+            if layer.mode == "repeat":
+                u0 -= 2 * C * np.floor((u0 + C) / (2 * C))
+            v[0] = (*layer.axis, u0)
+            v[1] = (g * layer.density, C, 1.0 if layer.mode == "repeat" else 0.0, period)
             v[2], v[3] = c[:4], c[4:]
             v[4], v[5] = Q[1:5], Q[5:9]
         elif isinstance(layer, Potential):
@@ -158,25 +205,35 @@ def pack(fog: FogParams, particle_states: dict[int, tuple[np.ndarray, np.ndarray
             if layer.shape == "line":
                 axis = np.asarray(layer.direction, dtype=np.float64)
                 axis /= np.linalg.norm(axis)
-            v[0] = (*layer.center, layer.strength)
+            v[0] = (*(np.asarray(layer.center) - Es), g * layer.strength)
             v[1] = (*axis, layer.c)
             v[2, 0] = layer.e
         elif isinstance(layer, Sphere):
-            v[0] = (*layer.center, layer.radius)
-            v[1, 0] = layer.density
+            v[0] = (*(np.asarray(layer.center) - Es), layer.radius)
+            v[1, 0] = g * layer.density
         elif isinstance(layer, Particles):
             pos, strength = particle_states[i]
             count = len(pos)
-            parts[first:first + count, :3] = pos
+            parts[first:first + count, :3] = pos - E
             parts[first:first + count, 3] = strength
             v[0] = (layer.alpha, layer.radius, first, count)
             first += count
         elif isinstance(layer, Noise):
-            v[0] = (layer.density, 1.0 / layer.scale, 1.0 if layer.mode == "volume" else 0.0,
+            v[0] = (g * layer.density, 1.0 / layer.scale, 1.0 if layer.mode == "volume" else 0.0,
                     layer.samples)
             v[1, :2] = (1.0 if layer.height_falloff else 0.0, 1.0 / layer.falloff_scale)
+            v[2, :3] = np.mod(Es / layer.scale, 1.0)
+            v[3, :3] = noise_steps(fog.noise)
         elif isinstance(layer, Distance):
             v[0] = (layer.start, 1.0 / layer.distance, layer.exponent, layer.max)
             v[1, :3] = (layer.low, layer.high, 1.0 / layer.noise_scale)
+            v[2, :3] = np.mod(Es / layer.noise_scale, 1.0)
         n += 1
     return data.astype(np.float32), parts.astype(np.float32)
+
+
+def noise_steps(bake_params) -> np.ndarray:
+    """The largest step between neighbouring texels of the baked noise along x, y, z
+    (wrapping): bounds the trilinear noise's slope, for the volume mode's error bound."""
+    from .noise import steps
+    return steps(bake_params.size, bake_params.octaves, bake_params.blur, bake_params.seed)

@@ -19,7 +19,7 @@ from . import terrain
 import time
 from collections import OrderedDict
 
-from .layers import DEFINES, LAYER_VEC4, density_code, layer_code, pack, variant
+from .layers import DEFINES, LAYER_VEC4, density_code, direct_density, layer_code, pack, variant
 from .noise import bake
 from .params import MAX_PARTICLES, FogParams, Particles, StillParams, srgb_to_linear
 from .particles import simulate
@@ -373,23 +373,25 @@ class Renderer:
             ctx.copy_framebuffer(g.fbo, target)  # MSAA resolve of both colour attachments
         g.scene_key = key
 
-    def _set_fog_uniforms(self, prog, fog: FogParams, time: float) -> None:
+    def _set_fog_uniforms(self, prog, fog: FogParams, time: float, ref) -> None:
+        """The fog's uniforms for one draw, its layers packed relative to the reference
+        point `ref` (float64: the eye, or a group of rays' origin) at `time`."""
         states = {i: self._particle_state(l, time, fog)
                   for i, l in enumerate(fog.layers) if isinstance(l, Particles) and l.enabled}
-        data, parts = pack(fog, states)
+        data, parts = pack(fog, states, ref, time)
         self._packed = (data, parts)
         if "uLayer" in prog:   # constant indexing lets the compiler trim the array
             u = prog["uLayer"]
             u.write(data[:u.array_length].tobytes())
-        self.particles.write(parts.tobytes())
+        if states:
+            self.particles.write(parts.tobytes())
         self.particles.use(TEX["uParticles"])
         self._noise_tex(fog).use(TEX["uNoise"])
         e = fog.effects
-        _set(prog, "uWind", fog.wind.vector())
         _set(prog, "uStartDistance", e.start_distance)
         _set(prog, "uCutoffDistance", e.cutoff_distance)
         _set(prog, "uMaxOpacity", e.max_opacity)
-        _set(prog, "uDensityPow", fog.density)
+        _set(prog, "uDensity", direct_density(fog))
 
     def _particle_state(self, layer: Particles, time: float, fog: FogParams):
         """A particle layer's state at `time`, simulated once per distinct (layer, time,
@@ -418,6 +420,7 @@ class Renderer:
         for name, v in (("uEye", view.eye), ("uFwd", view.fwd), ("uRight", view.right),
                         ("uUp", view.up), ("uViewProj", view.view_proj)):
             _set(pp, name, v)
+        _set(pp, "uDensity", direct_density(fog))
         e = fog.effects
         _set(pp, "uSkyDistance", e.sky_distance)
         _set(pp, "uStartDistance", e.start_distance)
@@ -443,10 +446,9 @@ class Renderer:
         fog_fbo, fog_tex = self._fog_target(t, e.fog_scale)
         fog_fbo.use()
         fp = self.fog_program(still, e.fog_scale, raymarch_steps)
-        self._set_fog_uniforms(fp, still, still.time)
-        for name, v in (("uEye", view.eye), ("uFwd", view.fwd), ("uRight", view.right), ("uUp", view.up)):
+        self._set_fog_uniforms(fp, still, still.time, view.eye)
+        for name, v in (("uFwd", view.fwd), ("uRight", view.right), ("uUp", view.up)):
             _set(fp, name, v)
-        _set(fp, "uTime", still.time)
         _set(fp, "uSkyDistance", e.sky_distance)
         g.invdist.use(TEX["uInvDist"])
         self.empty_vao[fp].render(moderngl.TRIANGLES, vertices=3)
@@ -493,7 +495,7 @@ class Renderer:
                         ("uSunDir", still.sun.direction()), ("uScatterColor", sun_col * e.scatter)):
             _set(cp, name, v)
         for name, v in (("uScatterExponent", e.scatter_exponent), ("uBlurSigma", sigma),
-                        ("uDensityPow", still.density), ("uMaxOpacity", e.max_opacity),
+                        ("uMaxOpacity", e.max_opacity),
                         ("uBlurExponent", e.blur_exponent)):
             _set(cp, name, v)
         g.color.use(TEX["uColor"])
@@ -521,15 +523,39 @@ class Renderer:
         return np.frombuffer(raw, np.uint8).reshape(h, w, 3)[::-1]
 
     def transmittance(self, fog: FogParams, origins, directions, lengths, times) -> np.ndarray:
-        """T of each ray by the fog GLSL (float32). Rays are grouped by time, since the
-        particle state depends on it."""
-        n = len(lengths)
-        out = np.ones(n, np.float32)
-        times = np.asarray(times, dtype=np.float64)
-        for tval in np.unique(times):
-            idx = np.nonzero(times == tval)[0]
-            out[idx] = self._rays(fog, float(tval), np.asarray(origins)[idx],
-                                  np.asarray(directions)[idx], np.asarray(lengths)[idx])
+        """T of each ray by the fog GLSL (float32). Rays are drawn in groups sharing a time
+        (the particle state depends on it) and an origin (the layers are packed relative
+        to it, as a frame's are to its eye), one draw per group into one target."""
+        O = np.asarray(origins, dtype=np.float64).reshape(-1, 3)
+        W = np.asarray(directions, dtype=np.float64).reshape(-1, 3)
+        D = np.asarray(lengths, dtype=np.float64).reshape(-1)
+        t = np.asarray(times, dtype=np.float64).reshape(-1)
+        n = len(D)
+        keys = np.column_stack([t, O])
+        groups, inverse = np.unique(keys, axis=0, return_inverse=True)
+        order = np.argsort(inverse.reshape(-1), kind="stable")   # rays of a group contiguous
+        starts = np.searchsorted(inverse.reshape(-1)[order], np.arange(len(groups) + 1))
+        rows = -(-n // RAYS_PER_ROW)
+        _, rays, _, fbo = self._rays_targets(rows)
+        data = np.zeros((rows * RAYS_PER_ROW, 4), np.float32)
+        data[:n, :3], data[:n, 3] = W[order], D[order]
+        rays.write(data.tobytes(), viewport=(0, 0, RAYS_PER_ROW, rows))
+        fbo.use()
+        rp = self.rays_program(fog)
+        rays.use(TEX["uRays"])
+        for g, (tval, *ref) in enumerate(groups):
+            lo, hi = int(starts[g]), int(starts[g + 1])
+            self._set_fog_uniforms(rp, fog, float(tval), np.array(ref))
+            _set(rp, "uFirst", lo)
+            _set(rp, "uCount", hi - lo)
+            r0, r1 = lo // RAYS_PER_ROW, (hi - 1) // RAYS_PER_ROW + 1
+            fbo.viewport = (0, r0, RAYS_PER_ROW, r1 - r0)
+            self.empty_vao[rp].render(moderngl.TRIANGLES, vertices=3)
+        fbo.viewport = (0, 0, RAYS_PER_ROW, rows)
+        res = np.frombuffer(fbo.read(viewport=(0, 0, RAYS_PER_ROW, rows), components=1, dtype="f4",
+                                     alignment=1), np.float32)
+        out = np.empty(n, np.float32)
+        out[order] = res[:n]
         return out
 
     def _rays_targets(self, rows: int):
@@ -542,29 +568,9 @@ class Renderer:
                 _, old_rays, _, old_fbo = self._rays_fbo
                 release_fbo(old_fbo)   # the framebuffer first, then its target texture
                 old_rays.release()
-            rays = self.ctx.texture((RAYS_PER_ROW, 2 * cap), 4, dtype="f4")
+            rays = self.ctx.texture((RAYS_PER_ROW, cap), 4, dtype="f4")
             rays.filter = (moderngl.NEAREST, moderngl.NEAREST)
             target = self.ctx.texture((RAYS_PER_ROW, cap), 1, dtype="f4")
             fbo = self.ctx.framebuffer(color_attachments=[target])
             self._rays_fbo = (cap, rays, target, fbo)
         return self._rays_fbo
-
-    def _rays(self, fog, time, O, W, D) -> np.ndarray:
-        n = len(D)
-        rows = -(-n // RAYS_PER_ROW)
-        _, rays, _, fbo = self._rays_targets(rows)
-        data = np.zeros((rows, 2, RAYS_PER_ROW, 4), np.float32)
-        r, c = np.divmod(np.arange(n), RAYS_PER_ROW)
-        data[r, 0, c, :3], data[r, 0, c, 3] = O, D
-        data[r, 1, c, :3], data[r, 1, c, 3] = W, time
-        rays.write(data.tobytes(), viewport=(0, 0, RAYS_PER_ROW, 2 * rows))
-        fbo.use()
-        fbo.viewport = (0, 0, RAYS_PER_ROW, rows)
-        rp = self.rays_program(fog)
-        self._set_fog_uniforms(rp, fog, time)
-        _set(rp, "uRayCount", n)
-        rays.use(TEX["uRays"])
-        self.empty_vao[rp].render(moderngl.TRIANGLES, vertices=3)
-        res = np.frombuffer(fbo.read(viewport=(0, 0, RAYS_PER_ROW, rows), components=1, dtype="f4",
-                                     alignment=1), np.float32)
-        return res[:n].copy()

@@ -2,11 +2,15 @@
 // Trilinear interpolation is done here with texelFetch rather than by the sampler:
 // hardware filtering weights have as few as 8 bits on many GPUs (llvmpipe too), an
 // error of up to 1/512 of a texel step that the float64 reference would see.
-// x in m, invScale = tiles per metre. Texel centres at (i + 0.5) / N, as in GL.
-float noiseSample(sampler3D tex, vec3 x, float invScale) {
+// x in m (relative to the reference point), invScale = tiles per metre, off = the
+// reference point's position in tiles (wind slide included), reduced to [0, 1) in float64
+// on the CPU. Texel centres at (i + 0.5) / N, as in GL.
+float noiseSample(sampler3D tex, vec3 x, float invScale, vec3 off) {
     int n = textureSize(tex, 0).x;
     float N = float(n);
-    vec3 p = x * invScale * N - 0.5;
+    vec3 t = x * invScale;
+    t -= floor(t);                            // whole tiles first: keeps the sum below small
+    vec3 p = fract(t + off) * N - 0.5;
     p -= N * floor(p / N);                    // wrap into [0, N) before taking integers
     vec3 f = fract(p);
     ivec3 i0 = ivec3(floor(p)) % n;
@@ -25,9 +29,9 @@ float noiseSample(sampler3D tex, vec3 x, float invScale) {
 
 // Surface mode (the write-up): tau = rho d n at the visible point P, with the quadratic
 // height falloff n dY^2 / 2 + 0.001, dY = (O_y - P_y) / falloffScale (unitless).
-float noiseSurfaceOpticalDepth(sampler3D tex, vec3 O, vec3 P, vec3 Pslid, float d, float rho,
-                               float invScale, bool falloff, float invFalloffScale) {
-    float n = noiseSample(tex, Pslid, invScale);
+float noiseSurfaceOpticalDepth(sampler3D tex, vec3 O, vec3 P, float d, float rho,
+                               float invScale, vec3 off, bool falloff, float invFalloffScale) {
+    float n = noiseSample(tex, P, invScale, off);
     if (falloff) {
         float dy = (O.y - P.y) * invFalloffScale;
         n = n * dy * dy * 0.5 + 0.001;
@@ -35,13 +39,28 @@ float noiseSurfaceOpticalDepth(sampler3D tex, vec3 O, vec3 P, vec3 Pslid, float 
     return rho * d * n;
 }
 
-// Volume mode (beyond the write-up): rho integral of n along the ray by the midpoint rule
-// with `samples` points. Oslid is the slid eye point.
-float noiseVolumeOpticalDepth(sampler3D tex, vec3 Oslid, vec3 w, float d, float rho,
-                              float invScale, int samples) {
+// The stated error of the volume mode, in optical depth, that the sample count aims for.
+const float NOISE_TOL = 1e-3;
+
+// Samples the volume mode takes on a ray: its error bound rho L d^2 / (4 S) (see below)
+// brought under NOISE_TOL, within [1, maxSamples]. L = N invScale (|w| . D) bounds |dn/ds|
+// along the ray: n is trilinear, so each partial derivative is at most the largest step
+// between neighbouring texels along that axis (D, measured when the noise is baked).
+int noiseVolumeSamples(float d, float rho, float N, float invScale, vec3 w, vec3 D, int maxSamples) {
+    float L = N * invScale * dot(abs(w), D);
+    float need = ceil(rho * L * d * d / (4.0 * NOISE_TOL));
+    return int(clamp(need, 1.0, float(maxSamples)));
+}
+
+// Volume mode (beyond the write-up): rho times the integral of n along the ray by the
+// midpoint rule with S points. Each interval h errs by at most L h^2 / 4 (|n(s) - n(mid)|
+// <= L |s - mid|), so the optical depth errs by at most rho L d^2 / (4 S).
+float noiseVolumeOpticalDepth(sampler3D tex, vec3 O, vec3 w, float d, float rho,
+                              float invScale, vec3 off, vec3 D, int maxSamples) {
+    int n = noiseVolumeSamples(d, rho, float(textureSize(tex, 0).x), invScale, w, D, maxSamples);
     float acc = 0.0;
-    for (int i = 0; i < samples; ++i) {
-        acc += noiseSample(tex, Oslid + w * (d * (float(i) + 0.5) / float(samples)), invScale);
+    for (int i = 0; i < n; ++i) {
+        acc += noiseSample(tex, O + w * (d * (float(i) + 0.5) / float(n)), invScale, off);
     }
-    return rho * acc * d / float(samples);
+    return rho * acc * d / float(n);
 }

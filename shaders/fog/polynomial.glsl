@@ -1,14 +1,27 @@
 // Biri 2002, 3.2.2: P(u) = sum c_i u^i on [-C, C], tiled (repeat) or zero outside,
-// u = a . x + b. The running integral G(u) of the tiled P is n * (Q(C) - Q(-C)) + Q(r),
-// r = u - 2 C n in [-C, C), Q the antiderivative with Q(0) = 0 (coefficients q[1..8],
-// passed ready: q[i+1] = c_i / (i+1)).
+// u = a . x + b. Integrated along the ray as the tiles it crosses: the partial tile at
+// each end and the whole tiles between, each a non-negative amount (P >= 0 on [-C, C]),
+// so nothing cancels. A partial piece [u0, u1] inside one tile is (u1 - u0) times the
+// mean of P there, sum_i c_i/(i+1) D_i with D_i = (u1^(i+1) - u0^(i+1)) / (u1 - u0)
+// = sum_j u0^j u1^(i-j): a sum of products, never a difference of nearby antiderivatives.
+// q0, q1 hold c_i / (i+1) for i = 0..7; `period` is the integral over a whole tile.
 
 float polyEval(float u, vec4 c0, vec4 c1) {  // Horner, c0 = coefficients 0..3, c1 = 4..7
     return c0.x + u * (c0.y + u * (c0.z + u * (c0.w + u * (c1.x + u * (c1.y + u * (c1.z + u * c1.w))))));
 }
 
-float polyAntideriv(float u, vec4 q0, vec4 q1) {  // Q(u) = sum q[i+1] u^(i+1)
-    return u * polyEval(u, q0, q1);
+// The mean of P over [u0, u1] (u0 = u1 gives P(u0)).
+float polyMean(float u0, float u1, vec4 q0, vec4 q1) {
+    float D = 1.0, p = 1.0;                   // D_0 = 1, p = u0^0
+    float acc = q0.x;
+    p *= u0; D = u1 * D + p; acc += q0.y * D;  // D_i = u1 D_(i-1) + u0^i
+    p *= u0; D = u1 * D + p; acc += q0.z * D;
+    p *= u0; D = u1 * D + p; acc += q0.w * D;
+    p *= u0; D = u1 * D + p; acc += q1.x * D;
+    p *= u0; D = u1 * D + p; acc += q1.y * D;
+    p *= u0; D = u1 * D + p; acc += q1.z * D;
+    p *= u0; D = u1 * D + p; acc += q1.w * D;
+    return acc;
 }
 
 // Tiled P at u: r in [-C, C) for repeat; 0 outside [-C, C] for zero mode.
@@ -17,30 +30,30 @@ float polyTiled(float u, float C, bool repeatMode, vec4 c0, vec4 c1) {
     return (u < -C || u > C) ? 0.0 : polyEval(u, c0, c1);
 }
 
-float polyRunning(float u, float C, bool repeatMode, float period, vec4 q0, vec4 q1) {
-    if (repeatMode) {
-        float n = floor((u + C) / (2.0 * C));
-        return n * period + polyAntideriv(u - 2.0 * C * n, q0, q1);
+// tau / density along O + w s, s in [0, d]. u0 is u at the reference point, already
+// reduced to [-C, C) in float64 on the CPU (so it carries neither the eye's distance from
+// the origin nor the wind's slide); a . O and a . w d are added here.
+float polynomialOpticalDepth(vec3 O, vec3 w, float d, vec3 a, float u0, float C, bool repeatMode,
+                             float period, vec4 q0, vec4 q1) {
+    float ua = u0 + dot(a, O);
+    float ub = ua + dot(a, w) * d;
+    float lo = min(ua, ub), hi = max(ua, ub);
+    if (!repeatMode) {
+        float l = max(lo, -C), r = min(hi, C);
+        if (r < l) return 0.0;
+        float frac = hi > lo ? (r - l) / (hi - lo) : 1.0;   // share of the ray inside [-C, C]
+        return d * frac * polyMean(l, r, q0, q1);
     }
-    return polyAntideriv(clamp(u, -C, C), q0, q1);
-}
-
-// tau / density along O + w s, s in [0, d]: (G(u1) - G(u0)) / (a . w).
-float polynomialOpticalDepth(vec3 O, vec3 w, float d, vec3 a, float b, float C, bool repeatMode,
-                             float period, vec4 c0, vec4 c1, vec4 q0, vec4 q1) {
-    float u0 = dot(a, O) + b;
-    float du = dot(a, w) * d;
-    // shift both ends by whole periods so G(u1) - G(u0) does not cancel against a large G
-    if (repeatMode) u0 -= 2.0 * C * floor((u0 + C) / (2.0 * C));
-    // |du| < 1e-3 C: float32 cancellation in G(u1) - G(u0) (~1e-7 C / du relative) would
-    // beat the midpoint rule's error (du^2 P'' d / 24), so the midpoint rule is used
-    if (abs(du) < 1e-3 * C) return d * polyTiled(u0 + 0.5 * du, C, repeatMode, c0, c1);
-    float G0 = polyRunning(u0, C, repeatMode, period, q0, q1);
-    float G1 = polyRunning(u0 + du, C, repeatMode, period, q0, q1);
-    return (G1 - G0) * d / du;
+    float n0 = floor((lo + C) / (2.0 * C)), n1 = floor((hi + C) / (2.0 * C));
+    // the remainders lie in [-C, C); min/max only absorb float32 rounding of huge u
+    float r0 = clamp(lo - 2.0 * C * n0, -C, C), r1 = clamp(hi - 2.0 * C * n1, -C, C);
+    if (n0 == n1) return d * polyMean(r0, r1, q0, q1);
+    float whole = (C - r0) * polyMean(r0, C, q0, q1) + (n1 - n0 - 1.0) * period
+                + (r1 + C) * polyMean(-C, r1, q0, q1);
+    return d * whole / (hi - lo);
 }
 
 // P at x (tiled or zero outside), times nothing: the caller weights it by the density.
-float polynomialDensity(vec3 x, vec3 a, float b, float C, bool repeatMode, vec4 c0, vec4 c1) {
-    return polyTiled(dot(a, x) + b, C, repeatMode, c0, c1);
+float polynomialDensity(vec3 x, vec3 a, float u0, float C, bool repeatMode, vec4 c0, vec4 c1) {
+    return polyTiled(u0 + dot(a, x), C, repeatMode, c0, c1);
 }

@@ -1,24 +1,29 @@
-// Quilez, "analytically integrated volumetric media": density rho max(0, 1 - |x - s|^2/R^2)
-// integrated along O + w s, s in [0, d], clipped to the sphere. Worked in the unit sphere
-// for precision, then scaled by R back to metres. rho in 1/m, R and d in m.
-float sphereOpticalDepth(vec3 O, vec3 w, float d, vec3 center, float R, float rho) {
-    vec3 rc = (O - center) / R;
-    float b = dot(w, rc);
-    float c = dot(rc, rc) - 1.0;
-    float h = b * b - c;
-    if (h <= 0.0) return 0.0;                 // the line misses (or grazes) the sphere
-    h = sqrt(h);
-    float t1 = max(-b - h, 0.0);              // clip to the eye ...
-    float t2 = min(-b + h, d / R);            // ... and to the visible surface
-    if (t2 <= t1) return 0.0;
-    // antiderivative of 1 - |rc + t w|^2 = -(c + 2 b t + t^2)
-    float i1 = -(c * t1 + b * t1 * t1 + t1 * t1 * t1 / 3.0);
-    float i2 = -(c * t2 + b * t2 * t2 + t2 * t2 * t2 / 3.0);
-    return rho * R * (i2 - i1);
+// Quilez, "analytically integrated volumetric media": density rho max(0, 1 - |x - c|^2/R^2)
+// integrated along O + w s, s in [0, d], worked about the ray's closest approach to the
+// centre. With q = c - O, b = q . w and h = |q x w| (the miss distance), x = O + w (b + t)
+// has |x - c|^2 = h^2 + t^2, so the density is rho (a2 - t^2 / R^2), a2 = 1 - h^2/R^2, on
+// the chord |t| <= R sqrt(a2). Its integral over [t0, t1] is
+//   rho (t1 - t0) (a2 - (t0^2 + t0 t1 + t1^2) / (3 R^2)),
+// the length times the mean density. Nothing in it grows with the distance to the sphere
+// (the eye-centred form cancels like (D/R)^3), and h comes from a cross product, not from
+// |q|^2 - b^2. O, c in m (relative to the renderer's reference point), w unit, rho in 1/m.
+float sphereOpticalDepth(vec3 O, vec3 w, float d, vec3 c, float R, float rho) {
+    vec3 q = c - O;
+    float b = dot(q, w);
+    vec3 x = cross(q, w);
+    float invR2 = 1.0 / (R * R);
+    float a2 = 1.0 - dot(x, x) * invR2;
+    if (a2 <= 0.0) return 0.0;                // the line misses (or grazes) the sphere
+    float a = R * sqrt(a2);                   // half chord, m
+    float t0 = max(-b, -a);                   // clip to the eye (t = -b) ...
+    float t1 = min(d - b, a);                 // ... and to the end of the segment
+    if (t1 <= t0) return 0.0;
+    // the mean of a2 - t^2/R^2 over [t0, t1] is >= 0 there; max() only absorbs rounding
+    return rho * (t1 - t0) * max(a2 - (t0 * t0 + t0 * t1 + t1 * t1) * invR2 / 3.0, 0.0);
 }
 
-// Its density rho max(0, 1 - |x - s|^2 / R^2) at x, for the raymarched comparison.
-float sphereDensity(vec3 x, vec3 center, float R, float rho) {
-    vec3 r = (x - center) / R;
+// Its density rho max(0, 1 - |x - c|^2 / R^2) at x, for the raymarched comparison.
+float sphereDensity(vec3 x, vec3 c, float R, float rho) {
+    vec3 r = (x - c) / R;
     return rho * max(0.0, 1.0 - dot(r, r));
 }

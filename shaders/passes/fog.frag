@@ -8,13 +8,11 @@
 #include "passes/fog_texel.glsl"
 in vec2 vUV;
 uniform sampler2D uInvDist;       // full-resolution 1/distance (1/m), 0 = sky
-uniform vec3 uEye;                // m
 uniform vec3 uFwd, uRight, uUp;   // camera basis, right/up scaled by tan(fov/2)
-uniform float uTime;              // s
 uniform float uSkyDistance;       // m
 layout(location = 0) out vec2 fOut;  // (raw T, 1/distance used)
 void main() {
     FogTexel ft = fogTexel(gl_FragCoord.xy, uInvDist, uFwd, uRight, uUp);
     float d = ft.invd > 0.0 ? 1.0 / ft.invd : uSkyDistance;
-    fOut = vec2(fogRawTransmittance(uEye, ft.w, d, uTime), ft.invd);
+    fOut = vec2(fogRawTransmittance(vec3(0.0), ft.w, d), ft.invd);
 }

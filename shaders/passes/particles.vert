@@ -2,7 +2,8 @@
 // the pixels a particle can touch rather than particles x pixels): one instance per
 // particle, a quad over the screen bounds of its sphere of influence (radius R). A pixel
 // outside them has its segment farther than R from the particle: clarity 1 there.
-uniform sampler2D uParticles;     // (x, y, z, strength) per particle
+uniform sampler2D uParticles;     // (x, y, z relative to the eye, strength) per particle
+uniform vec3 uEye;                // m
 uniform int uFirst;               // this layer's first particle
 uniform float uRadius;            // m
 uniform mat4 uViewProj;
@@ -13,7 +14,7 @@ void main() {
     vec2 lo = vec2(1e9), hi = vec2(-1e9);
     bool behind = false;
     for (int i = 0; i < 8; ++i) {    // the corners of the sphere's bounding cube
-        vec3 c = q.xyz + uRadius * vec3((i & 1) == 0 ? -1.0 : 1.0, (i & 2) == 0 ? -1.0 : 1.0,
+        vec3 c = uEye + q.xyz + uRadius * vec3((i & 1) == 0 ? -1.0 : 1.0, (i & 2) == 0 ? -1.0 : 1.0,
                                         (i & 4) == 0 ? -1.0 : 1.0);
         vec4 clip = uViewProj * vec4(c, 1.0);
         // a corner at or behind the eye plane: the sphere may cover anything

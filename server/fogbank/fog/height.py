@@ -21,7 +21,15 @@ def exprel_neg(x):
 
 
 def optical_depth(layer, O, omega, d, t, wind):
-    # tau = rho d exp(-k (O_y - h0)) (1 - exp(-k d w_y)) / (k d w_y)
+    # tau = d rho(y_lo) (1 - exp(-k d |w_y|)) / (k d |w_y|), y_lo the segment's lower end:
+    # one exponential of the height difference, exprel in (0, 1], taken as
+    # exp(log rho - k (y_lo - h0) + log d + log exprel) so that no factor overflows alone
     O = slide(layer, O, t, wind)
     k = layer.falloff
-    return layer.density * d * np.exp(-k * (O[:, 1] - layer.base)) * exprel_neg(k * d * omega[:, 1])
+    if layer.density <= 0:
+        return np.zeros(len(d))
+    y_lo = O[:, 1] + np.minimum(d * omega[:, 1], 0.0)
+    with np.errstate(divide="ignore"):
+        e = (np.log(layer.density) - k * (y_lo - layer.base) + np.log(d)
+             + np.log(exprel_neg(k * d * np.abs(omega[:, 1]))))
+    return np.where(d > 0, np.exp(np.minimum(e, 700.0)), 0.0)

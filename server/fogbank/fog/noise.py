@@ -12,14 +12,39 @@ def density(layer, tex, x, t, wind):
     return layer.density * bake.sample(tex, slide(layer, x, t, wind), layer.scale)
 
 
+NOISE_TOL = 1e-3   # shaders/fog/noise.glsl: the volume mode's target error in optical depth
+
+
+def slope_bound(tex, omega, scale):
+    """L: a bound on |dn/ds| along each ray (1/m). Each partial derivative of trilinear
+    noise is at most the largest neighbouring-texel step along its axis (bake.steps)."""
+    N = tex.shape[0]
+    steps = np.abs(np.roll(tex, -1, 0) - tex).max(), np.abs(np.roll(tex, -1, 1) - tex).max(), \
+        np.abs(np.roll(tex, -1, 2) - tex).max()
+    return N / scale * (np.abs(omega) @ np.asarray(steps, dtype=np.float64))
+
+
+def error_bound(layer, tex, omega, d, n=None):
+    """The volume mode's stated bound on |optical depth - exact integral|: rho L d^2 / (4 S)
+    (the midpoint rule on an L-Lipschitz function: L h^2 / 4 per interval h)."""
+    n = volume_samples(layer, tex, omega, d) if n is None else n
+    return layer.density * slope_bound(tex, omega, layer.scale) * d * d / (4.0 * n)
+
+
+def volume_samples(layer, tex, omega, d):
+    """Samples per ray: the bound under NOISE_TOL, within [1, layer.samples]."""
+    need = np.ceil(layer.density * slope_bound(tex, omega, layer.scale) * d * d / (4.0 * NOISE_TOL))
+    return np.clip(need, 1, layer.samples)
+
+
 def optical_depth(layer, tex, O, omega, d, t, wind):
     if layer.mode == "volume":
-        # midpoint rule with `samples` points, the same points the shader takes
-        n = layer.samples
+        # the midpoint rule with the sample count the shader picks for each ray
+        n = volume_samples(layer, tex, omega, d)
         tau = np.zeros(len(d))
-        for i in range(n):
+        for i in range(int(n.max(initial=1))):
             x = O + omega * (d * (i + 0.5) / n)[:, None]
-            tau += density(layer, tex, x, t, wind)
+            tau += np.where(i < n, density(layer, tex, x, t, wind), 0.0)
         return tau * d / n
     P = O + omega * d[:, None]
     n = bake.sample(tex, slide(layer, P, t, wind), layer.scale)

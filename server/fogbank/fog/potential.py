@@ -26,22 +26,25 @@ def density(layer, x, t, wind):
 
 
 def optical_depth(layer, O, omega, d, t, wind):
-    # r^2(s) = |q + s w_perp|^2 = (m s + b)^2 + h^2 with m = |w_perp|, b = q . w_perp / m;
+    # in the plane across the axis, q = center - O, wn = w_perp / m: r^2(s) = (m s - b)^2 + h^2
+    # with b = q . wn and h = |q x wn| (a cross product: |q|^2 - b^2 cancels for far centres);
     # integral a / (K + e z^2) dz / m, K = c + e h^2, gives an arctangent difference,
     # written as atan2(y, 1 + x0 x1) / y so that m -> 0 (ray along the line) stays exact.
     u = _axis(layer)
-    q = _perp(slide(layer, O, t, wind) - np.asarray(layer.center), u)
+    q = _perp(np.asarray(layer.center) - slide(layer, O, t, wind), u)
     wp = _perp(omega, u)
     m = np.linalg.norm(wp, axis=1)
-    wn = wp / np.where(m > 0, m, 1.0)[:, None]
-    b = np.einsum("ij,ij->i", q, wn)
-    h2 = np.maximum(np.einsum("ij,ij->i", q, q) - b * b, 0.0)
+    along = m > 0
+    wn = wp / np.where(along, m, 1.0)[:, None]
+    b = np.where(along, np.einsum("ij,ij->i", q, wn), 0.0)
+    x = np.cross(q, wn)
+    h2 = np.where(along, np.einsum("ij,ij->i", x, x), np.einsum("ij,ij->i", q, q))
     K = layer.c + layer.e * h2
     s = np.sqrt(layer.e / K)
-    x0 = s * b
-    x1 = s * (b + m * d)
+    x0 = -s * b
+    x1 = s * (m * d - b)
     y = s * m * d
-    x = 1.0 + x0 * x1
+    xx = 1.0 + x0 * x1
     ysafe = np.where(y > 0, y, 1.0)
-    ratio = np.where(y > 1e-8, np.arctan2(y, x) / ysafe, 1.0 / x)
+    ratio = np.where(y > 1e-8, np.arctan2(y, xx) / ysafe, 1.0 / xx)
     return layer.strength * d / K * ratio

@@ -13,17 +13,17 @@ def density(layer, x, t, wind):
 
 
 def optical_depth(layer, O, omega, d, t, wind):
+    # about the closest approach (as shaders/fog/sphere.glsl): q = c - O, b = q . w,
+    # h^2 = |q x w|^2, a2 = 1 - h^2 / R^2; over t in [t0, t1] (segment and chord),
+    # rho (t1 - t0) (a2 - (t0^2 + t0 t1 + t1^2) / (3 R^2))
     R = layer.radius
-    rc = (slide(layer, O, t, wind) - np.asarray(layer.center)) / R
-    b = np.einsum("ij,ij->i", omega, rc)
-    c = np.einsum("ij,ij->i", rc, rc) - 1.0
-    h = b * b - c
-    hs = np.sqrt(np.maximum(h, 0.0))
-    t1 = np.maximum(-b - hs, 0.0)
-    t2 = np.minimum(-b + hs, d / R)
-    hit = (h > 0) & (t2 > t1)
-
-    def prim(x):  # antiderivative of 1 - |rc + x rd|^2 = -(c + 2 b x + x^2)
-        return -(c * x + b * x * x + x**3 / 3.0)
-
-    return np.where(hit, layer.density * R * (prim(t2) - prim(t1)), 0.0)
+    q = np.asarray(layer.center) - slide(layer, O, t, wind)
+    b = np.einsum("ij,ij->i", q, omega)
+    x = np.cross(q, omega)
+    a2 = 1.0 - np.einsum("ij,ij->i", x, x) / R**2
+    a = R * np.sqrt(np.maximum(a2, 0.0))
+    t0 = np.maximum(-b, -a)
+    t1 = np.minimum(d - b, a)
+    hit = (a2 > 0) & (t1 > t0)
+    mean = np.maximum(a2 - (t0 * t0 + t0 * t1 + t1 * t1) / (3.0 * R**2), 0.0)
+    return np.where(hit, layer.density * (t1 - t0) * mean, 0.0)

@@ -1,9 +1,9 @@
 """A whole fog's transmittance along rays, composed as the shader composes it.
 
-T = (exp(-sum tau_i) * T_particles * T_noise_surface * T_distance) ^ density, with the
-global effects applied as in shaders/fog/transmittance.glsl: the segment starts at
-`start_distance`, points beyond `cutoff_distance` get no fog, and T never drops below
-1 - `max_opacity`.
+T = exp(-density sum tau_i) * (T_particles * T_distance) ^ density (the density scales the
+optical depth before the exponential), with the global effects applied as in
+shaders/fog/transmittance.glsl: the segment starts at `start_distance`, points beyond
+`cutoff_distance` get no fog, and T never drops below 1 - `max_opacity`.
 """
 
 from __future__ import annotations
@@ -25,13 +25,22 @@ EXPONENTIAL = {
 }
 
 
+def optical_depth(layer, fog: FogParams, O, omega, d, t, *, tex=None):
+    """An exponential layer's optical depth along the rays, or None for a direct one."""
+    wind = fog.wind.vector()
+    if layer.kind in EXPONENTIAL:
+        return EXPONENTIAL[layer.kind].optical_depth(layer, O, omega, d, t, wind)
+    if isinstance(layer, Noise):
+        return noise.optical_depth(layer, tex, O, omega, d, t, wind)
+    return None
+
+
 def layer_transmittance(layer, fog: FogParams, O, omega, d, t, *, tex=None, state=None):
     """One layer's T along the rays (no global effects)."""
     wind = fog.wind.vector()
-    if layer.kind in EXPONENTIAL:
-        return np.exp(-EXPONENTIAL[layer.kind].optical_depth(layer, O, omega, d, t, wind))
-    if isinstance(layer, Noise):
-        return np.exp(-noise.optical_depth(layer, tex, O, omega, d, t, wind))
+    tau = optical_depth(layer, fog, O, omega, d, t, tex=tex)
+    if tau is not None:
+        return np.exp(-tau)
     if isinstance(layer, Distance):
         return distance.transmittance(layer, tex, O, omega, d, t, wind)
     if isinstance(layer, Particles):
@@ -53,14 +62,19 @@ def transmittance(fog: FogParams, O, omega, d, t, *, states=None):
     tex = noise_bake.bake(fog.noise.size, fog.noise.octaves, fog.noise.blur, fog.noise.seed)
     ground = flat if fog.scene == "calibration" else ground_height
     T = np.ones(len(d))
+    tau = np.zeros(len(d))
     for i, layer in enumerate(fog.layers):
         if not layer.enabled:
+            continue
+        layer_tau = optical_depth(layer, fog, O, omega, dd, t, tex=tex)
+        if layer_tau is not None:
+            tau = tau + layer_tau
             continue
         state = None
         if isinstance(layer, Particles):
             state = (states or {}).get(i) or simulate(layer, float(t[0]), fog.wind.vector(), ground)
-        T = T * layer_transmittance(layer, fog, O, omega, dd, t, tex=tex, state=state)
-    T = T ** fog.density
+        T = T * layer_transmittance(layer, fog, O, omega, dd, t, tex=tex, state=state) ** fog.density
+    T = T * np.exp(-fog.density * tau) if fog.density > 0 else np.ones(len(d))
     if eff.cutoff_distance > 0:
         T = np.where(d > eff.cutoff_distance, 1.0, T)
     return np.maximum(T, 1.0 - eff.max_opacity)
