@@ -11,7 +11,7 @@ def break_sphere_shaders() -> dict:
 
     def broken(key, inline_particles=True):
         code = real(key, inline_particles)
-        if any(k == "sphere" for k, _, _ in key):
+        if any(k == "sphere" for k, _ in key):
             code += "this is not GLSL;\n"
         return code
     R.layer_code = broken

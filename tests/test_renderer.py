@@ -69,13 +69,20 @@ def test_calibration_pixels_match_reference_blend(renderer, layers, effects):
     still = calibration_still(layers=layers, time=4.0, density=effects.get("density", 1.0))
     eff = {k: v for k, v in effects.items() if k != "density"}
     still = still.model_copy(update={"effects": still.effects.model_copy(update=eff)})
+    objects = _check_pixels(renderer, still)
+    assert objects == {-1, 0, 1, 2, 3, 4}    # every object is checked
+
+
+def _check_pixels(renderer, still, min_share=0.8):
+    """Every interior pixel of `still` against the blend of its object's colour and the fog
+    colour by the float64 reference T; returns the objects seen."""
     img = renderer.render(still).astype(np.float64)
     view = cam.view(still.camera, W, H)
     py, px = np.mgrid[0:H, 0:W]
     gl_y = H - 1 - py                                  # image rows are top first
     w = view.ray(px.ravel(), gl_y.ravel(), W, H)
     d, obj = _cast(view.eye, w)
-    obj = obj.reshape(H, W)
+    obj = np.where(d < cam.FAR, obj, -1).reshape(H, W)   # beyond the far plane: sky
     # interior pixels only: the 3x3 neighbourhood sees the same object (MSAA edges excluded)
     same = np.ones((H, W), bool)
     for dy in (-1, 0, 1):
@@ -93,9 +100,31 @@ def test_calibration_pixels_match_reference_blend(renderer, layers, effects):
     want = _to_srgb(T[:, None] * scene_lin + (1 - T[:, None]) * fog_lin)
     got = img.reshape(-1, 3)[sel]
     err = np.abs(got - want)
-    assert sel.sum() > 0.8 * W * H
-    assert set(np.unique(obj[same])) == {-1, 0, 1, 2, 3, 4}    # every object is checked
+    assert sel.sum() > min_share * W * H
     assert err.max() <= 2.0, (err.max(), np.unravel_index(err.argmax(), err.shape))
+    assert np.ptp(T) > 0.05           # the fog varies across the picture: the check has teeth
+    return set(np.unique(obj[same]).tolist())
+
+
+@pytest.mark.parametrize("camera,layers,objects", [
+    # 700 m up, looking down on the boxes through height fog and a sphere below
+    ({"position": (2.0, 700.0, -73.0), "yaw": 0.0, "pitch": -89.0, "fov": 10.0},
+     [{"kind": "height", "density": 0.01, "falloff": 0.01, "base": 0.0},
+      {"kind": "sphere", "center": (-40.0, 200.0, -90.0), "radius": 60.0, "density": 0.01}],
+     {0, 1, 2, 3, 4}),
+    # near the edge of the domain, 12.7 km from the origin: the scene is out of reach, the
+    # sky's fog comes from layers placed by the eye, drifting with the wind at a late time
+    ({"position": (9000.0, 30.0, -9000.0), "yaw": -90.0, "pitch": 4.0, "fov": 60.0},
+     [{"kind": "sphere", "center": (8940.0, 34.0, -9003.0), "radius": 25.0, "density": 0.03},
+      {"kind": "cosine", "density": 0.004, "c0": 1.0, "scale": 3.0, "wind": True,
+       "terms": [{"amp": 0.9, "k": (0.3, 1.1, 0.2), "phase": 0.5}]},
+      {"kind": "height", "density": 0.002, "falloff": 0.05, "base": 20.0}],
+     {-1}),
+])
+def test_calibration_from_high_and_far_cameras(renderer, camera, layers, objects):
+    still = calibration_still(layers=layers, camera=camera, time=3.7e5,
+                              effects={"scatter": 0.0, "sky_distance": 300.0})
+    assert _check_pixels(renderer, still, min_share=0.6) == objects
 
 
 def test_same_params_same_pixels(renderer):

@@ -1,0 +1,375 @@
+"""An independent float64 truth for one look's transmittance along one ray.
+
+The densities are written out here again from DESIGN.md, not imported from fogbank.fog,
+and each exponential layer's optical depth is integrated numerically with adaptive
+quadrature (scipy's QUADPACK), told where the integrand has its features: a sphere's
+chord ends, a potential's closest approach and width, the lowest point of a height
+layer, a tiled polynomial's tile borders (whole tiles integrated once and counted).
+Cosine terms use QUADPACK's oscillatory rule (QAWO) with the phase reduced exactly in
+rational arithmetic, so late times and fine waves lose nothing. Volume noise is
+integrated exactly: trilinear noise is a cubic between the ray's crossings of the texel
+lattice, and Simpson's rule is exact on each such piece.
+"""
+
+from __future__ import annotations
+
+import math
+from fractions import Fraction
+
+import numpy as np
+from scipy.integrate import quad
+
+TWO_PI = Fraction("6.283185307179586476925286766559005768394338798750211641949889184615632812572417997256069650684234136")
+
+
+def _q(x) -> Fraction:
+    return Fraction(float(x))
+
+
+def reduced_phase(k, x, scale, phase) -> float:
+    """(k . x / scale + phase) mod 2 pi, exactly from the float64 inputs."""
+    a = sum(_q(ki) * _q(xi) for ki, xi in zip(k, x)) / _q(scale) + _q(phase)
+    return float(a - TWO_PI * math.floor(a / TWO_PI))
+
+
+def slid(layer, fog, O, time):
+    """The ray origin in the layer's own frame: rho(x - wind t) for a wind-sensitive layer."""
+    if not layer.wind:
+        return np.asarray(O, dtype=np.float64)
+    return np.asarray(O, dtype=np.float64) - fog.wind.vector() * time
+
+
+def _quad(f, a, b, points=()):
+    pts = sorted(p for p in set(points) if a < p < b)
+    edges = [a] + pts + [b]
+    total = 0.0
+    for lo, hi in zip(edges[:-1], edges[1:]):
+        if hi > lo:
+            total += quad(f, lo, hi, limit=500, epsabs=0.0, epsrel=1e-11)[0]
+    return total
+
+
+# ------------------------------------------------------------------ exponential layers
+
+
+def tau_homogeneous(layer, fog, O, w, d, time):
+    return _quad(lambda s: layer.density, 0.0, d)
+
+
+def tau_height(layer, fog, O, w, d, time):
+    """The optical depth's logarithm: it can pass float64's range (e^3000 under the base)."""
+    if layer.density == 0 or d == 0:
+        return -math.inf
+    Os = slid(layer, fog, O, time)
+    k = layer.falloff
+
+    def log_rho(s):
+        return math.log(layer.density) - k * (Os[1] + s * w[1] - layer.base)
+
+    low = d if w[1] < 0 else 0.0            # the lowest point, where the density peaks
+    m = log_rho(low)
+    scale = 1.0 / (k * abs(w[1])) if k * abs(w[1]) > 0 else d
+    pts = [low + sgn * scale * f for f in (0.1, 1, 3, 10, 30, 100) for sgn in (-1, 1)]
+    inner = _quad(lambda s: math.exp(log_rho(s) - m), 0.0, d, pts)
+    return m + math.log(inner) if inner > 0 else -math.inf
+
+
+def tau_cosine(layer, fog, O, w, d, time):
+    Os = slid(layer, fog, O, time)
+    tau = layer.c0 * d
+    for t in layer.terms:
+        A = reduced_phase(t.k, Os, layer.scale, t.phase)
+        B = float(np.dot(t.k, w)) / layer.scale
+        if B == 0:
+            tau += t.amp * d * math.cos(A)
+            continue
+        c = quad(lambda s: 1.0, 0.0, d, weight="cos", wvar=B, limit=500)[0]
+        s = quad(lambda s: 1.0, 0.0, d, weight="sin", wvar=B, limit=500)[0]
+        tau += t.amp * (math.cos(A) * c - math.sin(A) * s)
+    return layer.density * tau
+
+
+def _poly(layer, u):
+    return sum(c * u**i for i, c in enumerate(layer.coeffs))
+
+
+def tau_polynomial(layer, fog, O, w, d, time):
+    Os = slid(layer, fog, O, time)
+    C = layer.half_width
+    a = layer.axis
+    u0q = sum(_q(ai) * _q(xi) for ai, xi in zip(a, Os)) + _q(layer.offset)
+    rate = float(np.dot(a, w))
+    repeat = layer.mode == "repeat"
+    if repeat:   # shift u0 by whole tiles, exactly
+        u0q -= 2 * _q(C) * math.floor((u0q + _q(C)) / (2 * _q(C)))
+    u0 = float(u0q)
+
+    def P(u):
+        if repeat:
+            u = u - 2 * C * math.floor((u + C) / (2 * C))
+        elif u < -C or u > C:
+            return 0.0
+        return _poly(layer, u)
+
+    if rate == 0 or d == 0:
+        return layer.density * d * P(u0)
+    u1 = u0 + rate * d
+    lo, hi = min(u0, u1), max(u0, u1)
+    if not repeat:
+        lo, hi = max(lo, -C), min(hi, C)
+        return layer.density * (_quad(P, lo, hi) if hi > lo else 0.0) / abs(rate)
+    n0, n1 = math.floor((lo + C) / (2 * C)), math.floor((hi + C) / (2 * C))
+    if n0 == n1:
+        return layer.density * _quad(P, lo, hi) / abs(rate)
+    whole = _quad(lambda u: _poly(layer, u), -C, C)
+    total = (_quad(P, lo, (n0 + 0.5) * 2 * C) + (n1 - n0 - 1) * whole
+             + _quad(P, (n1 - 0.5) * 2 * C, hi))
+    return layer.density * total / abs(rate)
+
+
+def tau_potential(layer, fog, O, w, d, time):
+    Os = slid(layer, fog, O, time)
+    c = np.asarray(layer.center, dtype=np.float64)
+    if layer.shape == "line":
+        u = np.asarray(layer.direction, dtype=np.float64)
+        u = u / np.linalg.norm(u)
+    else:
+        u = np.zeros(3)
+
+    def r2(s):
+        v = Os + w * s - c
+        v = v - np.dot(v, u) * u
+        return float(np.dot(v, v))
+
+    def f(s):
+        return layer.strength / (layer.c + layer.e * r2(s))
+
+    wp = w - np.dot(w, u) * u
+    m2 = float(np.dot(wp, wp))
+    pts = []
+    if m2 > 0:
+        q = c - Os
+        q = q - np.dot(q, u) * u
+        s_star = float(np.dot(q, wp)) / m2
+        width = math.sqrt((layer.c + layer.e * r2(s_star)) / layer.e / m2)
+        pts = [s_star + sgn * width * f_ for f_ in (0, 0.3, 1, 3, 10, 100, 1000) for sgn in (-1, 1)]
+    return _quad(f, 0.0, d, pts)
+
+
+def tau_sphere(layer, fog, O, w, d, time):
+    Os = slid(layer, fog, O, time)
+    c = np.asarray(layer.center, dtype=np.float64)
+    R = layer.radius
+
+    def f(s):
+        v = Os + w * s - c
+        return layer.density * max(0.0, 1.0 - float(np.dot(v, v)) / R**2)
+
+    q = c - Os
+    b = float(np.dot(q, w))
+    h2 = float(np.dot(np.cross(q, w), np.cross(q, w)))
+    if h2 >= R * R:
+        return 0.0
+    half = math.sqrt(R * R - h2)
+    lo, hi = max(0.0, b - half), min(d, b + half)
+    return _quad(f, lo, hi) if hi > lo else 0.0
+
+
+# ------------------------------------------------------------------ noise
+
+
+def noise_at(tex, x, scale, offset_tiles=None):
+    """Trilinear, wrapping lookup of the baked tile at points x (N, 3), texel centres at
+    (i + 0.5) / N. Written again here; x in tiles is reduced exactly when it is large."""
+    n = tex.shape[0]
+    p = np.asarray(x, dtype=np.float64) / scale
+    p = (p - np.floor(p)) * n - 0.5
+    i0 = np.floor(p).astype(np.int64)
+    f = p - i0
+    out = np.zeros(len(p))
+    for dx in (0, 1):
+        for dy in (0, 1):
+            for dz in (0, 1):
+                wgt = ((f[:, 0] if dx else 1 - f[:, 0]) * (f[:, 1] if dy else 1 - f[:, 1])
+                       * (f[:, 2] if dz else 1 - f[:, 2]))
+                out += wgt * tex[(i0[:, 0] + dx) % n, (i0[:, 1] + dy) % n, (i0[:, 2] + dz) % n]
+    return out
+
+
+MAX_PIECES = 2_000_000
+
+
+def noise_line_integral(tex, O, w, d, scale):
+    """The exact integral of the trilinear noise along O + w s, s in [0, d], or None when
+    the ray crosses more than MAX_PIECES lattice cells. Between crossings of the lattice
+    (planes p_i = integer, p = x / scale * N - 1/2) the noise is a cubic in s; Simpson's
+    rule on each piece is exact for cubics."""
+    n = tex.shape[0]
+    if d == 0:
+        return 0.0
+    p0 = np.asarray(O, dtype=np.float64) / scale * n - 0.5
+    dp = np.asarray(w, dtype=np.float64) / scale * n
+    cuts = [np.array([0.0, d])]
+    count = 0
+    for i in range(3):
+        if dp[i] == 0:
+            continue
+        a, b = sorted((p0[i], p0[i] + dp[i] * d))
+        k0, k1 = math.floor(a) + 1, math.ceil(b) - 1
+        count += max(0, k1 - k0 + 1)
+        if count > MAX_PIECES:
+            return None
+        if k1 >= k0:
+            cuts.append((np.arange(k0, k1 + 1) - p0[i]) / dp[i])
+    s = np.unique(np.clip(np.concatenate(cuts), 0.0, d))
+    lo, hi = s[:-1], s[1:]
+    mid = (lo + hi) / 2
+
+    def at(t):
+        return noise_at(tex, np.asarray(O)[None, :] + np.asarray(w)[None, :] * t[:, None], scale)
+
+    return float(np.sum((hi - lo) / 6.0 * (at(lo) + 4 * at(mid) + at(hi))))
+
+
+# ------------------------------------------------------------------ the whole look
+
+EXPONENTIAL = {"homogeneous": tau_homogeneous, "height": tau_height, "cosine": tau_cosine,
+               "polynomial": tau_polynomial, "potential": tau_potential, "sphere": tau_sphere}
+
+
+def particle_clarity(layer, state, O, w, d):
+    pos, strength = state
+    T = 1.0
+    for p, s in zip(pos, strength):
+        rel = np.asarray(p, dtype=np.float64) - O
+        u = min(max(float(np.dot(rel, w)), 0.0), d)
+        dist = float(np.linalg.norm(rel - u * w))
+        T *= 1.0 - layer.alpha * s * min(max(1.0 - dist / layer.radius, 0.0), 1.0)
+    return T
+
+
+def raw(fog, O, w, d, time, tex=None, states=None):
+    """(log of the optical depth of the exponential layers, log of the direct transmittances) along
+    the segment after the start distance, before the global density: or None where the
+    exact volume-noise integral is out of reach (more than MAX_PIECES cells)."""
+    O = np.asarray(O, dtype=np.float64)
+    w = np.asarray(w, dtype=np.float64)
+    e = fog.effects
+    Os = O + w * e.start_distance
+    ds = max(d - e.start_distance, 0.0)
+    P = Os + w * ds
+    tau = 0.0
+    log_tau = -math.inf   # logs of optical depths that float64 cannot hold (height fog)
+    log_direct = 0.0
+    for i, layer in enumerate(fog.layers):
+        if not layer.enabled:
+            continue
+        if layer.kind == "height":
+            log_tau = np.logaddexp(log_tau, tau_height(layer, fog, Os, w, ds, time))
+        elif layer.kind in EXPONENTIAL:
+            tau += EXPONENTIAL[layer.kind](layer, fog, Os, w, ds, time)
+        elif layer.kind == "noise":
+            if layer.mode == "volume":
+                integral = noise_line_integral(tex, slid(layer, fog, Os, time), w, ds, layer.scale)
+                if integral is None:
+                    return None
+                tau += layer.density * integral
+            else:
+                n = noise_at(tex, slid(layer, fog, P, time)[None, :], layer.scale)[0]
+                if layer.height_falloff:
+                    dy = (Os[1] - P[1]) / layer.falloff_scale
+                    n = n * dy * dy / 2 + 0.001
+                tau += layer.density * ds * n
+        elif layer.kind == "distance":
+            n = noise_at(tex, slid(layer, fog, P, time)[None, :], layer.noise_scale)[0]
+            N = layer.low + (layer.high - layer.low) * n
+            x = max(ds - layer.start, 0.0) / layer.distance
+            F = min(max(N * x**layer.exponent, 0.0), layer.max)
+            log_direct += math.log(1.0 - F) if F < 1 else -math.inf
+        elif layer.kind == "particles":
+            c = particle_clarity(layer, states[i], Os, w, ds)
+            log_direct += math.log(c) if c > 0 else -math.inf
+        else:
+            raise AssertionError(f"no truth for layer kind {layer.kind!r}")
+    return float(np.logaddexp(log_tau, math.log(tau) if tau > 0 else -math.inf)), log_direct
+
+
+def compose(fog, d, parts):
+    """T from raw()'s parts: the global density, the cutoff and the max opacity."""
+    e = fog.effects
+    if e.cutoff_distance > 0 and d > e.cutoff_distance:
+        return 1.0
+    if fog.density == 0:
+        return 1.0
+    log_tau, log_direct = parts
+    x = math.exp(min(math.log(fog.density) + log_tau, 700.0)) - fog.density * log_direct
+    T = math.exp(-x) if math.isfinite(x) else 0.0
+    return max(T, 1.0 - e.max_opacity)
+
+
+def truth(fog, O, w, d, time, tex=None, states=None):
+    """T of the look along one ray (None: see raw)."""
+    parts = raw(fog, O, w, d, time, tex, states)
+    return None if parts is None else compose(fog, d, parts)
+
+
+# ------------------------------------------------------------------ the contract
+
+ULP = 2.0**-24          # float32's unit roundoff
+RAY_ULPS = 8            # the GPU's ray: within this many float32 roundings of the request
+
+
+def noise_bound(fog, tex, w, d):
+    """The volume noise's stated error bound on T (docs/accuracy.md): the midpoint rule on
+    an L-Lipschitz integrand errs by at most rho L d^2 / (4 S) in optical depth, with S the
+    samples the shader takes, ceil(rho L d^2 / (4e-3)) within [1, samples]."""
+    e = fog.effects
+    ds = max(d - e.start_distance, 0.0)
+    if e.cutoff_distance > 0 and d > e.cutoff_distance:
+        return 0.0
+    total = 0.0
+    n = tex.shape[0]
+    steps = [float(np.abs(np.roll(tex.astype(np.float64), -1, a) - tex).max()) for a in range(3)]
+    for layer in fog.layers:
+        if layer.enabled and layer.kind == "noise" and layer.mode == "volume":
+            rho = fog.density * layer.density
+            L = n / layer.scale * float(np.abs(np.asarray(w)) @ np.asarray(steps))
+            S = min(max(math.ceil(rho * L * ds * ds / 4e-3), 1), layer.samples)
+            total += rho * L * ds * ds / (4.0 * S)
+    return min(total, 1.0)
+
+
+def perturbed(O, w, d, eta):
+    """The ray turned by eta about two axes across it, and its length scaled by 1 +- eta."""
+    w = np.asarray(w, dtype=np.float64)
+    a = np.cross(w, [1.0, 0.0, 0.0] if abs(w[0]) < 0.9 else [0.0, 1.0, 0.0])
+    a /= np.linalg.norm(a)
+    b = np.cross(w, a)
+    out = [(O, w, d * (1 + eta)), (O, w, d * (1 - eta))]
+    for axis in (a, b, -a, -b):
+        v = w + eta * axis
+        out.append((O, v / np.linalg.norm(v), d))
+    return out
+
+
+def check(fog, O, w, d, time, got, tol, tex=None, states=None):
+    """(|dT| against the truth, whether it keeps the contract, why) for one ray: within
+    `tol`, plus the volume noise's stated bound; or, where float32 cannot place the ray
+    finely enough for that, within `tol` of the exact T of a ray RAY_ULPS float32
+    roundings away (the backward error of any float32 renderer: docs/accuracy.md).
+    None where the truth is out of reach."""
+    want = truth(fog, O, w, d, time, tex, states)
+    if want is None:
+        return None
+    if not (np.isfinite(got) and 0.0 <= got <= 1.0):
+        return abs(got - want) if np.isfinite(got) else 1.0, False, "not in [0, 1]"
+    err = abs(got - want)
+    allowed = tol + (noise_bound(fog, tex, w, d) if tex is not None else 0.0)
+    if err <= allowed:
+        return err, True, "forward"
+    eta = RAY_ULPS * ULP * (1.0 + 0.0)
+    near = [truth(fog, o, v, l, time, tex, states) for o, v, l in perturbed(O, w, d, eta)]
+    near = [x for x in near if x is not None] + [want]
+    if min(near) - allowed <= got <= max(near) + allowed:
+        return err, True, "backward"
+    return err, False, "beyond"
