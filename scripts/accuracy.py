@@ -60,6 +60,7 @@ def measure(post, kind: str, scale: str, looks: int, rays: int, seed: int):
     worst = {"err": 0.0}
     n_rays = skipped = refused = informative = backward = broken = 0
     errs = []
+    broken_cases = []
     for _ in range(looks):
         fog = draw_look(kind, rng, scale)
         t = fog.time
@@ -87,6 +88,10 @@ def measure(post, kind: str, scale: str, looks: int, rays: int, seed: int):
             errs.append(err)
             backward += how == "backward"
             broken += not kept
+            if not kept and len(broken_cases) < 5:
+                broken_cases.append({"err": float(err), "got": float(got[i]), "want": float(want),
+                                     "origin": O[i].tolist(), "direction": W[i].tolist(),
+                                     "length": float(D[i]), "params": fog.model_dump(mode="json")})
             if err > worst["err"]:
                 worst = {"err": float(err), "kept": kept, "how": how, "got": float(got[i]),
                          "want": float(want), "origin": O[i].tolist(), "direction": W[i].tolist(),
@@ -95,7 +100,7 @@ def measure(post, kind: str, scale: str, looks: int, rays: int, seed: int):
     return {"kind": kind, "scale": scale, "looks": looks, "rays": n_rays, "skipped": skipped,
             "refused": refused, "informative": informative, "backward": backward, "broken": broken, "max": float(errs.max()), "p99": float(np.quantile(errs, 0.99)),
             "over_1_255": int((errs > 1 / 255).sum()), "over_2e-4": int((errs > 2e-4).sum()),
-            "worst": worst}
+            "worst": worst, "broken_cases": broken_cases}
 
 
 def in_process_post():

@@ -231,3 +231,30 @@ def test_input_beyond_the_contract_is_refused(client, where, patch):
     detail = r.json()["detail"]
     assert any(where in [str(x) for x in d["loc"]] for d in detail), detail
     assert any("10000" in d["msg"] or "100000" in d["msg"] for d in detail), detail
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_float64_references_over_the_schema(kind):
+    """fogbank.fog (the numpy references that mirror the shaders, in float64) against the
+    quadrature truth over the same draws: no NaN, and within 1e-6 (volume noise: within
+    its stated bound, since the reference takes the shader's samples)."""
+    rng = np.random.default_rng(100 + KINDS.index(kind))
+    for scale in ("domain", "scene"):
+        for _ in range(40):
+            fog = draw_look(kind, rng, scale)
+            t = fog.time
+            tex = bake(fog.noise.size, fog.noise.octaves, fog.noise.blur, fog.noise.seed)
+            states = {i: simulate(l, t, fog.wind.vector(), flat) for i, l in enumerate(fog.layers)
+                      if l.kind == "particles"}
+            extra = [p for pos, _ in states.values() for p in pos[:8]]
+            O, W, D = draw_rays(fog, rng, RAYS, scale, extra)
+            parts = [raw(fog, O[i], W[i], D[i], t, tex, states) for i in range(RAYS)]
+            fog = tune_density(fog, parts, rng)
+            got = reference(fog, O, W, D, t, states=states)
+            assert np.all(np.isfinite(got)) and np.all((got >= 0) & (got <= 1))
+            for i in range(RAYS):
+                if parts[i] is None:
+                    continue
+                want = compose(fog, D[i], parts[i])
+                assert abs(got[i] - want) <= 1e-6 + noise_bound(fog, tex, W[i], D[i]), (
+                    i, got[i], want, O[i].tolist(), W[i].tolist(), D[i], fog.model_dump(mode="json"))

@@ -314,14 +314,16 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         W = W / np.linalg.norm(W, axis=1)[:, None]
         D = np.array([r.length for r in req.rays])
         Tm = np.array([r.time for r in req.rays])
-        c = cost.transmittance_seconds(fog, len(D), len(np.unique(Tm)), settings.cost_scale)
+        groups = len(np.unique(np.column_stack([Tm, O]), axis=0))
+        c = cost.transmittance_seconds(fog, len(D), len(np.unique(Tm)), settings.cost_scale, groups)
         if c.seconds > settings.still_budget_s:
             metrics.ERRORS.labels("cost").inc()
             raise RequestValidationError([{
                 "loc": ["body", "rays"], "type": "cost",
                 "msg": f"this request is estimated at {c.seconds:.1f} s (each distinct ray time "
-                       f"simulates every particle layer); this server allows {settings.still_budget_s:g} s: "
-                       "use fewer distinct times or fewer particles"}])
+                       "simulates every particle layer, each distinct origin and time is one draw); "
+                       f"this server allows {settings.still_budget_s:g} s: use fewer distinct times, "
+                       "origins or particles"}])
         out = await _job(_slot_for(c.seconds), worker.transmittance, fog, O, W, D, Tm,
                          deadline=settings.render_timeout_s)
         return {"transmittance": [float(x) for x in out["T"]],

@@ -128,9 +128,15 @@ def _describe(layer) -> str:
     return layer.kind
 
 
-def transmittance_seconds(fog: FogParams, rays: int, distinct_times: int, scale: float = 1.0) -> Cost:
-    """Rays cost little; each distinct time simulates every particle layer once."""
+def transmittance_seconds(fog: FogParams, rays: int, distinct_times: int, scale: float = 1.0,
+                          groups: int = 1) -> Cost:
+    """Rays cost little; each distinct time simulates every particle layer once; each
+    group of rays sharing an origin and a time is one draw, its layers packed relative
+    to that origin (measured on llvmpipe: ~40 us + ~28 us per layer + 0.15 us per particle)."""
     sim = sum(particle_sim_seconds(l) for l in fog.layers if isinstance(l, Particles) and l.enabled)
+    particles = sum(l.count for l in fog.layers if isinstance(l, Particles) and l.enabled)
     parts = {"rays": 2e-6 * rays * max(1, len(fog.layers)),
-             "distinct ray times x particle simulation": distinct_times * sim}
+             "distinct ray times x particle simulation": distinct_times * sim,
+             "distinct ray origins x packing": groups * (40e-6 + 28e-6 * len(fog.layers)
+                                                         + 0.15e-6 * particles)}
     return Cost(sum(parts.values()) * scale, rays * 48, {k: v * scale for k, v in parts.items()})

@@ -15,11 +15,15 @@ float sphereOpticalDepth(vec3 O, vec3 w, float d, vec3 c, float R, float rho) {
     float a2 = 1.0 - dot(x, x) * invR2;
     if (a2 <= 0.0) return 0.0;                // the line misses (or grazes) the sphere
     float a = R * sqrt(a2);                   // half chord, m
-    float t0 = max(-b, -a);                   // clip to the eye (t = -b) ...
-    float t1 = min(d - b, a);                 // ... and to the end of the segment
-    if (t1 <= t0) return 0.0;
+    // the chord is s in [b - a, b + a] along the ray; clip it to the segment [0, d]. The
+    // length is taken in s, so a segment inside the sphere has length d exactly (in t it
+    // would be (d - b) - (-b), which loses d's digits to b's when the centre is far)
+    float s0 = max(b - a, 0.0);
+    float s1 = min(b + a, d);
+    if (s1 <= s0) return 0.0;
+    float t0 = s0 - b, t1 = s1 - b;
     // the mean of a2 - t^2/R^2 over [t0, t1] is >= 0 there; max() only absorbs rounding
-    return rho * (t1 - t0) * max(a2 - (t0 * t0 + t0 * t1 + t1 * t1) * invR2 / 3.0, 0.0);
+    return rho * (s1 - s0) * max(a2 - (t0 * t0 + t0 * t1 + t1 * t1) * invR2 / 3.0, 0.0);
 }
 
 // Its density rho max(0, 1 - |x - c|^2 / R^2) at x, for the raymarched comparison.

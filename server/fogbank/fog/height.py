@@ -20,16 +20,18 @@ def exprel_neg(x):
     return np.where(small, 1.0 - x / 2.0 + x * x / 6.0, -np.expm1(-safe) / safe)
 
 
-def optical_depth(layer, O, omega, d, t, wind):
+def optical_depth(layer, O, omega, d, t, wind, weight=1.0):
+    """weight (the global density) multiplies the result inside the logarithm, where a tiny
+    weight over a huge depth (e^3000 under the base) stays representable."""
     # tau = d rho(y_lo) (1 - exp(-k d |w_y|)) / (k d |w_y|), y_lo the segment's lower end:
     # one exponential of the height difference, exprel in (0, 1], taken as
     # exp(log rho - k (y_lo - h0) + log d + log exprel) so that no factor overflows alone
     O = slide(layer, O, t, wind)
     k = layer.falloff
-    if layer.density <= 0:
+    if layer.density <= 0 or weight <= 0:
         return np.zeros(len(d))
     y_lo = O[:, 1] + np.minimum(d * omega[:, 1], 0.0)
     with np.errstate(divide="ignore"):
-        e = (np.log(layer.density) - k * (y_lo - layer.base) + np.log(d)
+        e = (np.log(layer.density) + np.log(weight) - k * (y_lo - layer.base) + np.log(d)
              + np.log(exprel_neg(k * d * np.abs(omega[:, 1]))))
     return np.where(d > 0, np.exp(np.minimum(e, 700.0)), 0.0)

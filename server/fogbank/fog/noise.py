@@ -24,23 +24,26 @@ def slope_bound(tex, omega, scale):
     return N / scale * (np.abs(omega) @ np.asarray(steps, dtype=np.float64))
 
 
-def error_bound(layer, tex, omega, d, n=None):
-    """The volume mode's stated bound on |optical depth - exact integral|: rho L d^2 / (4 S)
-    (the midpoint rule on an L-Lipschitz function: L h^2 / 4 per interval h)."""
-    n = volume_samples(layer, tex, omega, d) if n is None else n
-    return layer.density * slope_bound(tex, omega, layer.scale) * d * d / (4.0 * n)
+def error_bound(layer, tex, omega, d, weight=1.0):
+    """The volume mode's stated bound on |optical depth - exact integral|: rho L d^2 / (4 S),
+    rho = weight * density (the midpoint rule on an L-Lipschitz function: L h^2 / 4 per
+    interval h)."""
+    n = volume_samples(layer, tex, omega, d, weight)
+    return weight * layer.density * slope_bound(tex, omega, layer.scale) * d * d / (4.0 * n)
 
 
-def volume_samples(layer, tex, omega, d):
-    """Samples per ray: the bound under NOISE_TOL, within [1, layer.samples]."""
-    need = np.ceil(layer.density * slope_bound(tex, omega, layer.scale) * d * d / (4.0 * NOISE_TOL))
+def volume_samples(layer, tex, omega, d, weight=1.0):
+    """Samples per ray: the bound under NOISE_TOL, within [1, layer.samples]. The shader
+    counts the optical depth with the global density (`weight`) inside, and so does this."""
+    rho = weight * layer.density
+    need = np.ceil(rho * slope_bound(tex, omega, layer.scale) * d * d / (4.0 * NOISE_TOL))
     return np.clip(need, 1, layer.samples)
 
 
-def optical_depth(layer, tex, O, omega, d, t, wind):
+def optical_depth(layer, tex, O, omega, d, t, wind, weight=1.0):
     if layer.mode == "volume":
         # the midpoint rule with the sample count the shader picks for each ray
-        n = volume_samples(layer, tex, omega, d)
+        n = volume_samples(layer, tex, omega, d, weight)
         tau = np.zeros(len(d))
         for i in range(int(n.max(initial=1))):
             x = O + omega * (d * (i + 0.5) / n)[:, None]

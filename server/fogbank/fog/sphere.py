@@ -22,8 +22,9 @@ def optical_depth(layer, O, omega, d, t, wind):
     x = np.cross(q, omega)
     a2 = 1.0 - np.einsum("ij,ij->i", x, x) / R**2
     a = R * np.sqrt(np.maximum(a2, 0.0))
-    t0 = np.maximum(-b, -a)
-    t1 = np.minimum(d - b, a)
-    hit = (a2 > 0) & (t1 > t0)
+    s0 = np.maximum(b - a, 0.0)      # the chord clipped to the segment, along the ray
+    s1 = np.minimum(b + a, d)
+    t0, t1 = s0 - b, s1 - b
+    hit = (a2 > 0) & (s1 > s0)
     mean = np.maximum(a2 - (t0 * t0 + t0 * t1 + t1 * t1) / (3.0 * R**2), 0.0)
-    return np.where(hit, layer.density * (t1 - t0) * mean, 0.0)
+    return np.where(hit, layer.density * (s1 - s0) * mean, 0.0)

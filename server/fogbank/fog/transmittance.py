@@ -25,8 +25,19 @@ EXPONENTIAL = {
 }
 
 
-def optical_depth(layer, fog: FogParams, O, omega, d, t, *, tex=None):
-    """An exponential layer's optical depth along the rays, or None for a direct one."""
+def optical_depth(layer, fog: FogParams, O, omega, d, t, *, tex=None, weight=1.0):
+    """An exponential layer's optical depth along the rays times `weight` (the global
+    density), or None for a direct one."""
+    wind = fog.wind.vector()
+    if layer.kind == "height":
+        return height.optical_depth(layer, O, omega, d, t, wind, weight)
+    if isinstance(layer, Noise):
+        return weight * noise.optical_depth(layer, tex, O, omega, d, t, wind, weight)
+    tau = _optical_depth(layer, fog, O, omega, d, t, tex=tex)
+    return None if tau is None else weight * tau
+
+
+def _optical_depth(layer, fog: FogParams, O, omega, d, t, *, tex=None):
     wind = fog.wind.vector()
     if layer.kind in EXPONENTIAL:
         return EXPONENTIAL[layer.kind].optical_depth(layer, O, omega, d, t, wind)
@@ -66,7 +77,7 @@ def transmittance(fog: FogParams, O, omega, d, t, *, states=None):
     for i, layer in enumerate(fog.layers):
         if not layer.enabled:
             continue
-        layer_tau = optical_depth(layer, fog, O, omega, dd, t, tex=tex)
+        layer_tau = optical_depth(layer, fog, O, omega, dd, t, tex=tex, weight=fog.density)
         if layer_tau is not None:
             tau = tau + layer_tau
             continue
@@ -74,7 +85,7 @@ def transmittance(fog: FogParams, O, omega, d, t, *, states=None):
         if isinstance(layer, Particles):
             state = (states or {}).get(i) or simulate(layer, float(t[0]), fog.wind.vector(), ground)
         T = T * layer_transmittance(layer, fog, O, omega, dd, t, tex=tex, state=state) ** fog.density
-    T = T * np.exp(-fog.density * tau) if fog.density > 0 else np.ones(len(d))
+    T = T * np.exp(-tau) if fog.density > 0 else np.ones(len(d))
     if eff.cutoff_distance > 0:
         T = np.where(d > eff.cutoff_distance, 1.0, T)
     return np.maximum(T, 1.0 - eff.max_opacity)
