@@ -23,7 +23,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT / "tests"), str(ROOT / "server")]
 
 from domain import draw_look, draw_rays  # noqa: E402
-from quadrature import check, compose, raw  # noqa: E402
+from quadrature import check, compose, noise_bound, raw  # noqa: E402
 
 KINDS = ["homogeneous", "height", "cosine", "polynomial", "potential", "sphere",
          "particles", "noise", "distance"]
@@ -61,6 +61,8 @@ def measure(post, kind: str, scale: str, looks: int, rays: int, seed: int):
     n_rays = skipped = refused = informative = backward = broken = 0
     errs = []
     broken_cases = []
+    tight = []        # volume-noise rays whose stated bound is <= 1/255: their errors
+    volume = 0
     for _ in range(looks):
         fog = draw_look(kind, rng, scale)
         t = fog.time
@@ -86,6 +88,10 @@ def measure(post, kind: str, scale: str, looks: int, rays: int, seed: int):
             tol = 2e-4 if scale == "scene" else 1 / 255
             err, kept, how = check(fog, O[i], W[i], D[i], t, got[i], tol, tex, states)
             errs.append(err)
+            if any(l.kind == "noise" and l.mode == "volume" for l in fog.layers):
+                volume += 1
+                if noise_bound(fog, tex, W[i], D[i]) <= 1 / 255:
+                    tight.append(err)
             backward += how == "backward"
             broken += not kept
             if not kept and len(broken_cases) < 5:
@@ -100,6 +106,8 @@ def measure(post, kind: str, scale: str, looks: int, rays: int, seed: int):
     return {"kind": kind, "scale": scale, "looks": looks, "rays": n_rays, "skipped": skipped,
             "refused": refused, "informative": informative, "backward": backward, "broken": broken, "max": float(errs.max()), "p99": float(np.quantile(errs, 0.99)),
             "over_1_255": int((errs > 1 / 255).sum()), "over_2e-4": int((errs > 2e-4).sum()),
+            "volume_rays": volume, "volume_tight": len(tight),
+            "volume_tight_max": float(max(tight, default=0.0)),
             "worst": worst, "broken_cases": broken_cases}
 
 

@@ -143,6 +143,11 @@ def draw_look(kind: str, rng, scale: str = "domain") -> FogParams:
         "noise": FogParams().noise.model_dump(mode="json")})
     if rng.random() < 0.5:   # half the looks without start, cutoff or max opacity
         fog = fog.model_copy(update={"effects": FogParams().effects})
+    speed = float(np.linalg.norm(fog.wind.vector()))
+    if scale == "domain" and rng.random() < 0.5 and speed * fog.time > 2e4:
+        # half the looks keep their features within reach of the rays (a slide of up to
+        # 5e7 m carries a sliding layer out of the domain, where T = 1 tells nothing)
+        fog = fog.model_copy(update={"time": float(rng.uniform(0, 2e4 / speed))})
     if scale == "scene":
         speed = np.linalg.norm(fog.wind.vector())
         if speed * fog.time > SCENE_SLIDE:

@@ -238,14 +238,16 @@ EXPONENTIAL = {"homogeneous": tau_homogeneous, "height": tau_height, "cosine": t
 
 
 def particle_clarity(layer, state, O, w, d):
+    """Fischer: the product over particles of 1 - alpha s clamp(1 - dist / R, 0, 1), dist
+    from each particle to the segment (projected onto the line, clamped to [0, d])."""
     pos, strength = state
-    T = 1.0
-    for p, s in zip(pos, strength):
-        rel = np.asarray(p, dtype=np.float64) - O
-        u = min(max(float(np.dot(rel, w)), 0.0), d)
-        dist = float(np.linalg.norm(rel - u * w))
-        T *= 1.0 - layer.alpha * s * min(max(1.0 - dist / layer.radius, 0.0), 1.0)
-    return T
+    if len(pos) == 0:
+        return 1.0
+    rel = np.asarray(pos, dtype=np.float64) - O
+    u = np.clip(rel @ w, 0.0, d)
+    dist = np.linalg.norm(rel - u[:, None] * w[None, :], axis=1)
+    opacity = layer.alpha * np.asarray(strength) * np.clip(1.0 - dist / layer.radius, 0.0, 1.0)
+    return float(np.prod(1.0 - opacity))
 
 
 def raw(fog, O, w, d, time, tex=None, states=None):
@@ -340,16 +342,17 @@ def noise_bound(fog, tex, w, d):
 
 
 def perturbed(O, w, d, eta):
-    """The ray turned by eta about two axes across it, and its length scaled by 1 +- eta."""
+    """Pairs of rays either side of this one: its length scaled by 1 -+ eta, and it turned
+    by -+eta about each of two axes across it."""
     w = np.asarray(w, dtype=np.float64)
     a = np.cross(w, [1.0, 0.0, 0.0] if abs(w[0]) < 0.9 else [0.0, 1.0, 0.0])
     a /= np.linalg.norm(a)
     b = np.cross(w, a)
-    out = [(O, w, d * (1 + eta)), (O, w, d * (1 - eta))]
-    for axis in (a, b, -a, -b):
-        v = w + eta * axis
-        out.append((O, v / np.linalg.norm(v), d))
-    return out
+    pairs = [((O, w, d * (1 - eta)), (O, w, d * (1 + eta)))]
+    for axis in (a, b):
+        pairs.append(tuple((O, (w + s * eta * axis) / np.linalg.norm(w + s * eta * axis), d)
+                           for s in (-1.0, 1.0)))
+    return pairs
 
 
 def check(fog, O, w, d, time, got, tol, tex=None, states=None):
@@ -367,9 +370,19 @@ def check(fog, O, w, d, time, got, tol, tex=None, states=None):
     allowed = tol + (noise_bound(fog, tex, w, d) if tex is not None else 0.0)
     if err <= allowed:
         return err, True, "forward"
-    eta = RAY_ULPS * ULP * (1.0 + 0.0)
-    near = [truth(fog, o, v, l, time, tex, states) for o, v, l in perturbed(O, w, d, eta)]
-    near = [x for x in near if x is not None] + [want]
-    if min(near) - allowed <= got <= max(near) + allowed:
-        return err, True, "backward"
+    # T is continuous along each path minus-ray -> ray -> plus-ray, so every value between
+    # the three is the exact T of some ray on it. Not across the cutoff distance, where T
+    # jumps: there only the three values themselves count.
+    cutoff = fog.effects.cutoff_distance
+    for pair in perturbed(O, w, d, RAY_ULPS * ULP):
+        ends = [truth(fog, o, v, l, time, tex, states) for o, v, l in pair]
+        if None in ends:
+            continue
+        values = [ends[0], want, ends[1]]
+        jumps = cutoff > 0 and (pair[0][2] > cutoff) != (pair[1][2] > cutoff)
+        if jumps:
+            if min(abs(got - x) for x in values) <= allowed:
+                return err, True, "backward"
+        elif min(values) - allowed <= got <= max(values) + allowed:
+            return err, True, "backward"
     return err, False, "beyond"

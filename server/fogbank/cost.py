@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from .layers import variant
+from .layers import uses_noise, variant
 from .params import Cosine, FogParams, Noise, Particles, StillParams
 from .renderer import GBUFFER_BPP, LINEAR_BPP, MSAA_BPP, OUT_BPP
 
@@ -106,6 +106,9 @@ def estimate(still: StillParams, msaa: bool = True, fmt: str = "jpg", scale: flo
     for i, layer in enumerate(still.layers):
         if layer.enabled:
             parts[f"layers[{i}] ({_describe(layer)})"] = _layer_seconds(layer, fog_mpx)
+    n = still.noise
+    if uses_noise(still) and (n.size, n.octaves, n.blur, n.seed) != DEFAULT_BAKE:
+        parts[f"noise.size = {n.size} (baking the noise tile, once per worker)"] = bake_seconds(n)
     if not compiled:
         key = variant(still)
         parts[f"compiling the fog program for {len(key)} layers (once per worker)"] = jit_seconds(key)
@@ -116,6 +119,15 @@ def estimate(still: StillParams, msaa: bool = True, fmt: str = "jpg", scale: flo
         memory += px * LINEAR_BPP
     seconds = sum(parts.values()) * scale
     return Cost(seconds, memory, {k: v * scale for k, v in parts.items()})
+
+
+BAKE_S_PER_VOXEL_OCTAVE = 7.5e-7   # noise.bake on this machine: 6 s for 126^3 and 4 octaves
+DEFAULT_BAKE = (64, 4, 2, 7)       # baked by every worker's warm-up draw
+
+
+def bake_seconds(n) -> float:
+    """Seconds to bake a noise tile (NoiseBake) that a worker has not baked yet."""
+    return BAKE_S_PER_VOXEL_OCTAVE * n.size ** 3 * n.octaves
 
 
 def _describe(layer) -> str:
@@ -139,4 +151,7 @@ def transmittance_seconds(fog: FogParams, rays: int, distinct_times: int, scale:
              "distinct ray times x particle simulation": distinct_times * sim,
              "distinct ray origins x packing": groups * (40e-6 + 28e-6 * len(fog.layers)
                                                          + 0.15e-6 * particles)}
+    n = fog.noise
+    if uses_noise(fog) and (n.size, n.octaves, n.blur, n.seed) != DEFAULT_BAKE:
+        parts["noise bake"] = bake_seconds(n)
     return Cost(sum(parts.values()) * scale, rays * 48, {k: v * scale for k, v in parts.items()})

@@ -10,6 +10,9 @@ are packed relative to a reference point (the eye) and slid by the wind in float
 
 from __future__ import annotations
 
+import math
+from fractions import Fraction
+
 import numpy as np
 from numpy.polynomial import polynomial as npoly
 
@@ -42,8 +45,8 @@ _CODE = {
     # p0 = (alpha, radius, first particle, count); particle positions relative to E
     "particles": "for (int j = 0; j < int(uLayer[{b}].w); ++j) {{ "
                  "vec4 q = texelFetch(uParticles, ivec2(int(uLayer[{b}].z) + j, 0), 0); "
-                 "tau -= uDensity * log1mx(particleOpacity(Os, w, ds, q.xyz, uLayer[{b}].y, q.w, "
-                 "uLayer[{b}].x)); }}",
+                 "tau += directDepth(particleOpacity(Os, w, ds, q.xyz, uLayer[{b}].y, q.w, "
+                 "uLayer[{b}].x), uDensity); }}",
     # p0 = (density, 1/scale, -, max samples); p1 = (falloff flag, 1/falloff scale);
     # p2 = E in tiles mod 1; p3 = largest texel steps along x, y, z
     "noise/surface": "tau += noiseSurfaceOpticalDepth(uNoise, Os, P, ds, uLayer[{b}].x, "
@@ -51,9 +54,9 @@ _CODE = {
     "noise/volume": "tau += noiseVolumeOpticalDepth(uNoise, Os, w, ds, uLayer[{b}].x, uLayer[{b}].y, "
                     "uLayer[{b2}].xyz, uLayer[{b3}].xyz, int(uLayer[{b}].w));",
     # p0 = (start, 1/D, exponent, max); p1 = (low, high, 1/noise scale); p2 = E in tiles mod 1
-    "distance": "tau -= uDensity * log1mx(distanceFogAmount(ds, noiseSample(uNoise, P, uLayer[{b1}].z, "
+    "distance": "tau += directDepth(distanceFogAmount(ds, noiseSample(uNoise, P, uLayer[{b1}].z, "
                 "uLayer[{b2}].xyz), uLayer[{b}].x, uLayer[{b}].y, uLayer[{b}].z, uLayer[{b}].w, "
-                "uLayer[{b1}].x, uLayer[{b1}].y));",
+                "uLayer[{b1}].x, uLayer[{b1}].y), uDensity);",
 }
 
 
@@ -133,7 +136,8 @@ FLT_MIN = float(np.finfo(np.float32).tiny)
 def direct_density(fog: FogParams) -> float:
     """uDensity, the weight of the direct transmittances' logarithms (T_j^density =
     exp(density log T_j)): a positive density too small for float32 is sent as its
-    smallest normal number (T^tiny is 1, or 0 where T is 0)."""
+    smallest normal number (T^tiny is 1 to float32; an opaque T_j = 0 stays 0 whatever
+    the density, shaders/common/math.glsl directDepth)."""
     return max(fog.density, FLT_MIN) if fog.density > 0 else 0.0
 
 
@@ -142,9 +146,42 @@ def _slide(layer, fog: FogParams, time: float) -> np.ndarray:
     return fog.wind.vector() * time if layer.wind else np.zeros(3)
 
 
-def _wrap_angle(x: float) -> float:
-    """x reduced to [-pi, pi) in float64."""
-    return float(x - 2 * np.pi * np.floor(x / (2 * np.pi) + 0.5))
+TWO_PI = Fraction("6.283185307179586476925286766559005768394338798750211641949889184615632812572417997256069650684234136")
+EXACT_ABOVE = 1e6   # |value| beyond which float64 (1e-16 relative) would lose 1e-10 of a period
+
+
+def _linear(k, E, wind, time, scale, offset) -> tuple[float, Fraction | None]:
+    """k . (E - wind time) / scale + offset: in float64, and exactly (a Fraction of the
+    float64 inputs) when it is large enough for float64's rounding to matter."""
+    x = float(np.dot(k, E - wind * time)) / scale + offset
+    big = abs(float(np.dot(np.abs(k), np.abs(E) + np.abs(wind) * time))) / scale + abs(offset)
+    if big < EXACT_ABOVE:
+        return x, None
+    F = [Fraction(float(v)) for v in k]
+    exact = sum(f * (Fraction(float(e)) - Fraction(float(w)) * Fraction(float(time)))
+                for f, e, w in zip(F, E, wind)) / Fraction(float(scale)) + Fraction(float(offset))
+    return x, exact
+
+
+def phase_at(k, E, wind, time, scale, phase) -> float:
+    """A cosine term's phase k . (E - wind time) / scale + phase at the reference point,
+    reduced to [-pi, pi) (exactly, when it is large: late times, fine waves)."""
+    x, exact = _linear(k, E, wind, time, scale, phase)
+    if exact is None:
+        return float(x - 2 * np.pi * np.floor(x / (2 * np.pi) + 0.5))
+    return float(exact - TWO_PI * math.floor(exact / TWO_PI + Fraction(1, 2)))
+
+
+def coordinate_at(axis, E, wind, time, offset, period, C) -> float:
+    """A polynomial's u = axis . (E - wind time) + offset at the reference point; with a
+    period (repeat mode), reduced to [-C, C) (exactly, when it is large)."""
+    x, exact = _linear(axis, E, wind, time, 1.0, offset)
+    if period is None:
+        return x
+    if exact is None:
+        return float(x - period * np.floor((x + C) / period))
+    P, Cf = Fraction(float(period)), Fraction(float(C))
+    return float(exact - P * math.floor((exact + Cf) / P))
 
 
 def split(x: float) -> tuple[float, float]:
@@ -185,7 +222,7 @@ def pack(fog: FogParams, particle_states: dict[int, tuple[np.ndarray, np.ndarray
         elif isinstance(layer, Cosine):
             v[0, :3] = (g * layer.density, layer.c0, 1.0 / layer.scale)
             for j, t in enumerate(layer.terms):
-                v[1 + j] = (*t.k, _wrap_angle(np.dot(t.k, Es) / layer.scale + t.phase))
+                v[1 + j] = (*t.k, phase_at(t.k, E, _slide(layer, fog, 1.0), time, layer.scale, t.phase))
                 v[9 + j // 4, j % 4] = t.amp
         elif isinstance(layer, Polynomial):
             C = layer.half_width
@@ -193,9 +230,8 @@ def pack(fog: FogParams, particle_states: dict[int, tuple[np.ndarray, np.ndarray
             c[:len(layer.coeffs)] = layer.coeffs
             Q = npoly.polyint(c)  # Q[0] = 0, Q[i+1] = c_i / (i + 1)
             period = npoly.polyval(C, Q) - npoly.polyval(-C, Q)
-            u0 = float(np.dot(layer.axis, Es) + layer.offset)
-            if layer.mode == "repeat":
-                u0 -= 2 * C * np.floor((u0 + C) / (2 * C))
+            u0 = coordinate_at(layer.axis, E, _slide(layer, fog, 1.0), time, layer.offset,
+                               2 * C if layer.mode == "repeat" else None, C)
             v[0] = (*layer.axis, u0)
             v[1] = (g * layer.density, C, 1.0 if layer.mode == "repeat" else 0.0, period)
             v[2], v[3] = c[:4], c[4:]
@@ -205,7 +241,9 @@ def pack(fog: FogParams, particle_states: dict[int, tuple[np.ndarray, np.ndarray
             if layer.shape == "line":
                 axis = np.asarray(layer.direction, dtype=np.float64)
                 axis /= np.linalg.norm(axis)
-            v[0] = (*(np.asarray(layer.center) - Es), g * layer.strength)
+            q = np.asarray(layer.center) - Es
+            q = q - np.dot(q, axis) * axis   # across the line, here in float64: a centre given
+            v[0] = (*q, g * layer.strength)  # far along the line must not cost the shader digits
             v[1] = (*axis, layer.c)
             v[2, 0] = layer.e
         elif isinstance(layer, Sphere):
@@ -230,6 +268,11 @@ def pack(fog: FogParams, particle_states: dict[int, tuple[np.ndarray, np.ndarray
             v[2, :3] = np.mod(Es / layer.noise_scale, 1.0)
         n += 1
     return data.astype(np.float32), parts.astype(np.float32)
+
+
+def uses_noise(fog: FogParams) -> bool:
+    """Whether an enabled layer samples the baked noise (noise and distance layers)."""
+    return any(l.enabled and isinstance(l, (Noise, Distance)) for l in fog.layers)
 
 
 def noise_steps(bake_params) -> np.ndarray:

@@ -19,7 +19,7 @@ from . import terrain
 import time
 from collections import OrderedDict
 
-from .layers import DEFINES, LAYER_VEC4, density_code, direct_density, layer_code, pack, variant
+from .layers import DEFINES, LAYER_VEC4, density_code, direct_density, layer_code, pack, uses_noise, variant
 from .noise import bake
 from .params import MAX_PARTICLES, FogParams, Particles, StillParams, srgb_to_linear
 from .particles import simulate
@@ -141,6 +141,7 @@ class Renderer:
         self._targets = ByteLRU(cache_bytes // 2)    # (w, h) -> Targets
         self._gbuffers = ByteLRU(cache_bytes // 2)   # (slot, w, h) -> GBuffer
         self._noise: dict[tuple, moderngl.Texture] = {}
+        self._no_noise: moderngl.Texture | None = None
         self._rays_fbo: tuple | None = None
         self._sim_cache: OrderedDict = OrderedDict()
         self._park_fbo: moderngl.Framebuffer | None = None
@@ -227,6 +228,12 @@ class Renderer:
         return self._meshes[name]
 
     def _noise_tex(self, fog: FogParams) -> moderngl.Texture:
+        """The baked noise tile, or a 1-texel stand-in when no enabled layer samples it
+        (baking a 128^3 tile takes seconds that a look without noise should not pay)."""
+        if not uses_noise(fog):
+            if self._no_noise is None:
+                self._no_noise = self.ctx.texture3d((1, 1, 1), 1, np.zeros(1, np.float32).tobytes(), dtype="f4")
+            return self._no_noise
         key = (fog.noise.size, fog.noise.octaves, fog.noise.blur, fog.noise.seed)
         if key not in self._noise:
             data = bake(*key)
@@ -549,7 +556,10 @@ class Renderer:
             _set(rp, "uFirst", lo)
             _set(rp, "uCount", hi - lo)
             r0, r1 = lo // RAYS_PER_ROW, (hi - 1) // RAYS_PER_ROW + 1
-            fbo.viewport = (0, r0, RAYS_PER_ROW, r1 - r0)
+            if r1 - r0 == 1:   # within one row: just its span (no fragments to discard)
+                fbo.viewport = (lo % RAYS_PER_ROW, r0, hi - lo, 1)
+            else:
+                fbo.viewport = (0, r0, RAYS_PER_ROW, r1 - r0)
             self.empty_vao[rp].render(moderngl.TRIANGLES, vertices=3)
         fbo.viewport = (0, 0, RAYS_PER_ROW, rows)
         res = np.frombuffer(fbo.read(viewport=(0, 0, RAYS_PER_ROW, rows), components=1, dtype="f4",

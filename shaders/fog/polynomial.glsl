@@ -30,9 +30,10 @@ float polyTiled(float u, float C, bool repeatMode, vec4 c0, vec4 c1) {
     return (u < -C || u > C) ? 0.0 : polyEval(u, c0, c1);
 }
 
-// tau / density along O + w s, s in [0, d]. u0 is u at the reference point, already
-// reduced to [-C, C) in float64 on the CPU (so it carries neither the eye's distance from
-// the origin nor the wind's slide); a . O and a . w d are added here.
+// tau / density along O + w s, s in [0, d]. u0 is u at the reference point, computed in
+// float64 on the CPU and, in repeat mode, reduced to [-C, C) there (so it carries neither
+// the eye's distance from the origin nor the wind's slide; in zero mode a large u0 is a
+// ray far outside the fog's slab); a . O and a . w d are added here.
 float polynomialOpticalDepth(vec3 O, vec3 w, float d, vec3 a, float u0, float C, bool repeatMode,
                              float period, vec4 q0, vec4 q1) {
     float ua = u0 + dot(a, O);

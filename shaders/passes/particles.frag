@@ -23,8 +23,8 @@ void main() {
         vec3 Os = ft.w * uStartDistance;   // relative to the eye, as the particles are
         float ds = max(d - uStartDistance, 0.0);
         // clarity^density, as exp(density log(1 - opacity)) (fog/transmittance.glsl)
-        c = exp(uDensity * log1mx(particleOpacity(Os, ft.w, ds, vParticle.xyz, uRadius,
-                                                  vParticle.w, uAlpha)));
+        c = exp(-directDepth(particleOpacity(Os, ft.w, ds, vParticle.xyz, uRadius,
+                                             vParticle.w, uAlpha), uDensity));
     }
     fClarity = vec4(c, 1.0, 1.0, 1.0);   // G (the inverse distance) is multiplied by 1
 }
