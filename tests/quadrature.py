@@ -237,17 +237,19 @@ EXPONENTIAL = {"homogeneous": tau_homogeneous, "height": tau_height, "cosine": t
                "polynomial": tau_polynomial, "potential": tau_potential, "sphere": tau_sphere}
 
 
-def particle_clarity(layer, state, O, w, d):
-    """Fischer: the product over particles of 1 - alpha s clamp(1 - dist / R, 0, 1), dist
-    from each particle to the segment (projected onto the line, clamped to [0, d])."""
+def particle_log_clarity(layer, state, O, w, d):
+    """Fischer: the log of the product over particles of 1 - alpha s clamp(1 - dist / R, 0, 1),
+    dist from each particle to the segment (projected onto the line, clamped to [0, d]);
+    summed as logarithms (900 particles of clarity 0.25 multiply to 1e-538, below float64)."""
     pos, strength = state
     if len(pos) == 0:
-        return 1.0
+        return 0.0
     rel = np.asarray(pos, dtype=np.float64) - O
     u = np.clip(rel @ w, 0.0, d)
     dist = np.linalg.norm(rel - u[:, None] * w[None, :], axis=1)
     opacity = layer.alpha * np.asarray(strength) * np.clip(1.0 - dist / layer.radius, 0.0, 1.0)
-    return float(np.prod(1.0 - opacity))
+    with np.errstate(divide="ignore"):
+        return float(np.sum(np.log1p(-opacity)))
 
 
 def raw(fog, O, w, d, time, tex=None, states=None):
@@ -289,8 +291,7 @@ def raw(fog, O, w, d, time, tex=None, states=None):
             F = min(max(N * x**layer.exponent, 0.0), layer.max)
             log_direct += math.log(1.0 - F) if F < 1 else -math.inf
         elif layer.kind == "particles":
-            c = particle_clarity(layer, states[i], Os, w, ds)
-            log_direct += math.log(c) if c > 0 else -math.inf
+            log_direct += particle_log_clarity(layer, states[i], Os, w, ds)
         else:
             raise AssertionError(f"no truth for layer kind {layer.kind!r}")
     return float(np.logaddexp(log_tau, math.log(tau) if tau > 0 else -math.inf)), log_direct
@@ -341,18 +342,22 @@ def noise_bound(fog, tex, w, d):
     return min(total, 1.0)
 
 
-def perturbed(O, w, d, eta):
-    """Pairs of rays either side of this one: its length scaled by 1 -+ eta, and it turned
-    by -+eta about each of two axes across it."""
+def perturbed(O, w, d, eta, n=9):
+    """Rays of the box around this one: its length scaled by 1 - eta, 1 or 1 + eta, and its
+    direction turned by n steps from -eta to eta about each of two axes across it."""
     w = np.asarray(w, dtype=np.float64)
     a = np.cross(w, [1.0, 0.0, 0.0] if abs(w[0]) < 0.9 else [0.0, 1.0, 0.0])
     a /= np.linalg.norm(a)
     b = np.cross(w, a)
-    pairs = [((O, w, d * (1 - eta)), (O, w, d * (1 + eta)))]
-    for axis in (a, b):
-        pairs.append(tuple((O, (w + s * eta * axis) / np.linalg.norm(w + s * eta * axis), d)
-                           for s in (-1.0, 1.0)))
-    return pairs
+    out = []
+    for fl in (-1, 0, 1):
+        for fa in np.linspace(-1, 1, n):
+            for fb in np.linspace(-1, 1, n):
+                if fl == 0 and fa == 0 and fb == 0:
+                    continue
+                v = w + eta * (fa * a + fb * b)
+                out.append((O, v / np.linalg.norm(v), d * (1 + fl * eta)))
+    return out
 
 
 def check(fog, O, w, d, time, got, tol, tex=None, states=None):
@@ -370,19 +375,16 @@ def check(fog, O, w, d, time, got, tol, tex=None, states=None):
     allowed = tol + (noise_bound(fog, tex, w, d) if tex is not None else 0.0)
     if err <= allowed:
         return err, True, "forward"
-    # T is continuous along each path minus-ray -> ray -> plus-ray, so every value between
-    # the three is the exact T of some ray on it. Not across the cutoff distance, where T
-    # jumps: there only the three values themselves count.
+    # The box of rays is connected and T is continuous on it (unless the cutoff distance
+    # falls inside it, where T jumps), so every value between its least and greatest T is
+    # the exact T of some ray in the box; across the cutoff only the values themselves count.
+    box = perturbed(O, w, d, RAY_ULPS * ULP)
+    values = [x for x in (truth(fog, o, v, l, time, tex, states) for o, v, l in box) if x is not None]
+    values.append(want)
     cutoff = fog.effects.cutoff_distance
-    for pair in perturbed(O, w, d, RAY_ULPS * ULP):
-        ends = [truth(fog, o, v, l, time, tex, states) for o, v, l in pair]
-        if None in ends:
-            continue
-        values = [ends[0], want, ends[1]]
-        jumps = cutoff > 0 and (pair[0][2] > cutoff) != (pair[1][2] > cutoff)
-        if jumps:
-            if min(abs(got - x) for x in values) <= allowed:
-                return err, True, "backward"
-        elif min(values) - allowed <= got <= max(values) + allowed:
+    if cutoff > 0 and min(l for _, _, l in box) <= cutoff < max(l for _, _, l in box):
+        if min(abs(got - x) for x in values) <= allowed:
             return err, True, "backward"
+    elif min(values) - allowed <= got <= max(values) + allowed:
+        return err, True, "backward"
     return err, False, "beyond"

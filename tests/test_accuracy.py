@@ -184,6 +184,19 @@ def test_line_potential_given_by_a_point_far_along_the_line(client):
         assert want.min() < 0.3 and want.max() > 0.6
 
 
+@pytest.mark.parametrize("mode", ["repeat", "zero"])
+def test_short_ray_near_a_root_of_a_polynomial_with_large_coefficients(client, mode):
+    """5e5 (u - 1)^2 on [-1000, 1000]: near u = 1 its power-basis terms (1e6) cancel to
+    0.5, which float32 kept to ~10%. Re-expanded about the ray it keeps its digits."""
+    base = {"kind": "polynomial", "coeffs": [5e5, -1e6, 5e5], "half_width": 1000.0,
+            "axis": [1.0, 0.0, 0.0], "offset": 0.0, "density": 10.0, "mode": mode}
+    fog = FogParams(layers=[base], scene="calibration")
+    O = np.array([[1.0 + off, 0.0, -0.01] for off in (1e-3, 2e-3, 3e-3, -2e-3)])
+    W = np.tile([0.0, 0.0, 1.0], (4, 1))
+    got, want = _compare(client, fog, O, W, np.full(4, 0.02), 2e-4)
+    assert want.min() < 0.5 and want.max() > 0.85
+
+
 def test_global_density_scales_the_optical_depth_before_the_exponential(client):
     """density 0.01 over 0.1/m homogeneous fog 1000 m long gave 0 instead of 0.368."""
     fog = FogParams(layers=[{"kind": "homogeneous", "density": 0.1}], density=0.01, scene="calibration")

@@ -33,10 +33,11 @@ _CODE = {
     # p0 = (log density at E's height, hi and lo, falloff)
     "height": "tau += heightOpticalDepth(Os, w, ds, uLayer[{b}].xy, uLayer[{b}].z);",
     # p0 = (axis, u at E reduced to [-C, C)); p1 = (density, C, repeat, period);
-    # p2, p3 coefficients; p4, p5 coefficients / (i + 1)
+    # p2, p3 coefficients; p4, p5 coefficients / (i + 1); p6, p7 the same about e;
+    # p8 = (e - u0, e), e the expansion point (u0, clamped to [-C, C] in zero mode)
     "polynomial": "tau += uLayer[{b1}].x * polynomialOpticalDepth(Os, w, ds, uLayer[{b}].xyz, "
                   "uLayer[{b}].w, uLayer[{b1}].y, uLayer[{b1}].z > 0.5, uLayer[{b1}].w, "
-                  "uLayer[{b4}], uLayer[{b5}]);",
+                  "uLayer[{b4}], uLayer[{b5}], uLayer[{b6}], uLayer[{b7}], uLayer[{b8}].xy);",
     # p0 = (center - E, strength); p1 = (unit axis or 0, c); p2.x = e
     "potential": "tau += potentialOpticalDepth(Os, w, ds, uLayer[{b}].xyz, uLayer[{b1}].xyz, "
                  "uLayer[{b}].w, uLayer[{b1}].w, uLayer[{b2}].x);",
@@ -236,6 +237,12 @@ def pack(fog: FogParams, particle_states: dict[int, tuple[np.ndarray, np.ndarray
             v[1] = (g * layer.density, C, 1.0 if layer.mode == "repeat" else 0.0, period)
             v[2], v[3] = c[:4], c[4:]
             v[4], v[5] = Q[1:5], Q[5:9]
+            # P about the point where the reference is (kept inside [-C, C] in zero mode),
+            # so a short ray near a root does not cancel large terms (polynomial.glsl)
+            e = min(max(u0, -C), C)
+            shifted = taylor_shift(c, e)
+            v[6], v[7] = shifted[:4] / np.arange(1, 5), shifted[4:] / np.arange(5, 9)
+            v[8, :2] = (e - u0, e)
         elif isinstance(layer, Potential):
             axis = np.zeros(3)
             if layer.shape == "line":
@@ -268,6 +275,15 @@ def pack(fog: FogParams, particle_states: dict[int, tuple[np.ndarray, np.ndarray
             v[2, :3] = np.mod(Es / layer.noise_scale, 1.0)
         n += 1
     return data.astype(np.float32), parts.astype(np.float32)
+
+
+def taylor_shift(c: np.ndarray, e: float) -> np.ndarray:
+    """Coefficients of P(e + v) in v, from P(u) = sum c_i u^i (float64)."""
+    out = np.zeros(len(c))
+    for i, ci in enumerate(c):
+        for k in range(i + 1):
+            out[k] += ci * math.comb(i, k) * e ** (i - k)
+    return out
 
 
 def uses_noise(fog: FogParams) -> bool:

@@ -33,22 +33,36 @@ float polyTiled(float u, float C, bool repeatMode, vec4 c0, vec4 c1) {
 // tau / density along O + w s, s in [0, d]. u0 is u at the reference point, computed in
 // float64 on the CPU and, in repeat mode, reduced to [-C, C) there (so it carries neither
 // the eye's distance from the origin nor the wind's slide; in zero mode a large u0 is a
-// ray far outside the fog's slab); a . O and a . w d are added here.
+// ray far outside the fog's slab). The ray's own u - u0 = a . O + a . w s is taken here.
+// A ray within one tile (the usual case, and the one where P can cancel: a short ray near
+// a root of a P with large coefficients) is integrated in P re-expanded about
+// e = u0 + ex.x (the coefficients p0, p1 = c'_i / (i+1), shifted in float64 by layers.py;
+// e = u0 in repeat mode, and e = u0 clamped into [-C, C] in zero mode, passed as ex.y), so
+// its terms are small where the ray is. Rays across tiles use the expansion about 0.
 float polynomialOpticalDepth(vec3 O, vec3 w, float d, vec3 a, float u0, float C, bool repeatMode,
-                             float period, vec4 q0, vec4 q1) {
-    float ua = u0 + dot(a, O);
-    float ub = ua + dot(a, w) * d;
-    float lo = min(ua, ub), hi = max(ua, ub);
+                             float period, vec4 q0, vec4 q1, vec4 p0, vec4 p1, vec2 ex) {
+    float va = dot(a, O);
+    float vb = va + dot(a, w) * d;
+    float vlo = min(va, vb), vhi = max(va, vb);          // the ray's u - u0
+    float lo = u0 + vlo, hi = u0 + vhi;
     if (!repeatMode) {
+        // clipped in u, where the slab's edges +-C are exact; the mean about the expansion
+        // point e = ex.y (= u0 + ex.x), from the ray's own offsets where it ends inside
         float l = max(lo, -C), r = min(hi, C);
         if (r < l) return 0.0;
-        float frac = hi > lo ? (r - l) / (hi - lo) : 1.0;   // share of the ray inside [-C, C]
-        return d * frac * polyMean(l, r, q0, q1);
+        bool cl = lo < -C, cr = hi > C;
+        float frac = (cl || cr) ? (r - l) / (vhi - vlo) : 1.0;   // share of the ray inside
+        float le = cl ? l - ex.y : vlo - ex.x;
+        float re = cr ? r - ex.y : vhi - ex.x;
+        return d * frac * polyMean(le, re, p0, p1);
     }
     float n0 = floor((lo + C) / (2.0 * C)), n1 = floor((hi + C) / (2.0 * C));
+    if (n0 == n1) {
+        float shift = 2.0 * C * n0;                     // 0 in the reference point's own tile
+        return d * polyMean(vlo - shift, vhi - shift, p0, p1);
+    }
     // the remainders lie in [-C, C); min/max only absorb float32 rounding of huge u
     float r0 = clamp(lo - 2.0 * C * n0, -C, C), r1 = clamp(hi - 2.0 * C * n1, -C, C);
-    if (n0 == n1) return d * polyMean(r0, r1, q0, q1);
     float whole = (C - r0) * polyMean(r0, C, q0, q1) + (n1 - n0 - 1.0) * period
                 + (r1 + C) * polyMean(-C, r1, q0, q1);
     return d * whole / (hi - lo);

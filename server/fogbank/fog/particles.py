@@ -14,10 +14,17 @@ def segment_distance(p, O, omega, d):
     return np.linalg.norm(closest, axis=2)
 
 
-def transmittance(layer, state, O, omega, d):
+def log_transmittance(layer, state, O, omega, d):
+    """log T, summed over particles as logarithms (a product of many clarities underflows
+    float64: 900 of 0.25 is 1e-538), -inf where a particle is opaque."""
     pos, strength = state
     if len(pos) == 0:
-        return np.ones(len(d))
+        return np.zeros(len(d))
     dist = segment_distance(pos, O, omega, d)
     opacity = layer.alpha * strength[None, :] * np.clip(1.0 - dist / layer.radius, 0.0, 1.0)
-    return np.prod(1.0 - opacity, axis=1)
+    with np.errstate(divide="ignore"):
+        return np.sum(np.log1p(-opacity), axis=1)
+
+
+def transmittance(layer, state, O, omega, d):
+    return np.exp(log_transmittance(layer, state, O, omega, d))

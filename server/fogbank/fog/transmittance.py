@@ -81,10 +81,13 @@ def transmittance(fog: FogParams, O, omega, d, t, *, states=None):
         if layer_tau is not None:
             tau = tau + layer_tau
             continue
-        state = None
-        if isinstance(layer, Particles):
+        if isinstance(layer, Particles):   # as a logarithm: the product can underflow
             state = (states or {}).get(i) or simulate(layer, float(t[0]), fog.wind.vector(), ground)
-        T = T * layer_transmittance(layer, fog, O, omega, dd, t, tex=tex, state=state) ** fog.density
+            log_t = particles.log_transmittance(layer, state, O, omega, dd)
+            with np.errstate(invalid="ignore"):
+                T = T * np.where(np.isneginf(log_t), 0.0, np.exp(fog.density * log_t))
+            continue
+        T = T * layer_transmittance(layer, fog, O, omega, dd, t, tex=tex) ** fog.density
     T = T * np.exp(-tau) if fog.density > 0 else np.ones(len(d))
     if eff.cutoff_distance > 0:
         T = np.where(d > eff.cutoff_distance, 1.0, T)
