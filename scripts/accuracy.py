@@ -22,8 +22,8 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT / "tests"), str(ROOT / "server")]
 
-from domain import draw_look, draw_rays  # noqa: E402
-from quadrature import check, compose, noise_bound, raw  # noqa: E402
+from cases import draw_case  # noqa: E402
+from quadrature import check, compose, noise_bound  # noqa: E402
 
 KINDS = ["homogeneous", "height", "cosine", "polynomial", "potential", "sphere",
          "particles", "noise", "distance"]
@@ -39,23 +39,7 @@ def glsl(post, fog, O, W, D, t):
     return np.array([np.nan if v is None else v for v in out["transmittance"]], dtype=np.float64), None
 
 
-def tune_density(fog, parts, rng):
-    """Most looks get the global density (a field like any other, in [0, 20]) that brings
-    the median ray's optical depth to about 1, so that the rays land where T is neither 0
-    nor 1 and an error can show; the rest keep the density they were drawn with."""
-    taus = [np.exp(min(p[0], 700.0)) - p[1] for p in parts if p is not None]
-    taus = [x for x in taus if np.isfinite(x) and x > 0]
-    if not taus or rng.random() < 0.25:
-        return fog
-    density = float(np.clip(np.exp(rng.uniform(-1, 1)) / np.median(taus), 0.0, 20.0))
-    return fog.model_copy(update={"density": density})
-
-
 def measure(post, kind: str, scale: str, looks: int, rays: int, seed: int):
-    from fogbank.noise import bake
-    from fogbank.particles import simulate
-    from fogbank.terrain import flat
-
     rng = np.random.default_rng(seed)
     worst = {"err": 0.0}
     n_rays = skipped = refused = informative = backward = broken = 0
@@ -64,15 +48,8 @@ def measure(post, kind: str, scale: str, looks: int, rays: int, seed: int):
     tight = []        # volume-noise rays whose stated bound is <= 1/255: their errors
     volume = 0
     for _ in range(looks):
-        fog = draw_look(kind, rng, scale)
-        t = fog.time
-        tex = bake(fog.noise.size, fog.noise.octaves, fog.noise.blur, fog.noise.seed)
-        states = {i: simulate(l, t, fog.wind.vector(), flat) for i, l in enumerate(fog.layers)
-                  if l.kind == "particles"}
-        extra = [p for pos, _ in states.values() for p in pos[:8]]
-        O, W, D = draw_rays(fog, rng, rays, scale, extra)
-        parts = [raw(fog, O[i], W[i], D[i], t, tex, states) for i in range(len(D))]
-        fog = tune_density(fog, parts, rng)
+        c = draw_case(kind, rng, scale, rays)
+        fog, O, W, D, tex, states, parts, t = c.fog, c.O, c.W, c.D, c.tex, c.states, c.parts, c.fog.time
         got, why = glsl(post, fog, O, W, D, t)
         if got is None:
             refused += 1

@@ -14,14 +14,12 @@ import math
 import numpy as np
 import pytest
 
-from domain import draw_look, draw_rays
+from cases import draw_case
 from fogbank.fog.transmittance import transmittance as reference
 from fogbank.noise import bake
 from fogbank.params import LAYER_CLASSES, FogParams, Height
-from fogbank.particles import simulate
 from fogbank.presets import preset_dict
-from fogbank.terrain import flat
-from quadrature import check, compose, noise_bound, raw, truth
+from quadrature import check, compose, noise_bound, truth
 
 KINDS = sorted(LAYER_CLASSES)
 LOOKS = 100
@@ -41,32 +39,14 @@ def glsl(client, fog: FogParams, O, W, D, t=None):
     return np.array(T, dtype=np.float64)
 
 
-def tune_density(fog, parts, rng):
-    """Most looks get the global density that brings the median ray's optical depth near
-    1 (T neither 0 nor 1, where an error shows); the rest keep their drawn density."""
-    taus = [math.exp(min(p[0], 700.0)) - p[1] for p in parts if p is not None]
-    taus = [x for x in taus if math.isfinite(x) and x > 0]
-    if not taus or rng.random() < 0.25:
-        return fog
-    return fog.model_copy(update={"density": float(np.clip(
-        math.exp(rng.uniform(-1, 1)) / np.median(taus), 0.0, 20.0))})
-
-
 @pytest.mark.parametrize("scale", ["domain", "scene"])
 @pytest.mark.parametrize("kind", KINDS)
 def test_contract_over_the_schema(client, kind, scale):
     rng = np.random.default_rng(KINDS.index(kind) * 2 + (scale == "scene"))
     worst, informative, telling, broken = 0.0, 0, 0, []
     for _ in range(LOOKS):
-        fog = draw_look(kind, rng, scale)
-        t = fog.time
-        tex = bake(fog.noise.size, fog.noise.octaves, fog.noise.blur, fog.noise.seed)
-        states = {i: simulate(l, t, fog.wind.vector(), flat) for i, l in enumerate(fog.layers)
-                  if l.kind == "particles"}
-        extra = [p for pos, _ in states.values() for p in pos[:8]]
-        O, W, D = draw_rays(fog, rng, RAYS, scale, extra)
-        parts = [raw(fog, O[i], W[i], D[i], t, tex, states) for i in range(RAYS)]
-        fog = tune_density(fog, parts, rng)
+        c = draw_case(kind, rng, scale, RAYS)
+        fog, O, W, D, tex, states, parts, t = c.fog, c.O, c.W, c.D, c.tex, c.states, c.parts, c.fog.time
         got = glsl(client, fog, O, W, D)
         assert np.all((got >= 0) & (got <= 1))
         told = 0
@@ -279,15 +259,8 @@ def test_float64_references_over_the_schema(kind):
     rng = np.random.default_rng(100 + KINDS.index(kind))
     for scale in ("domain", "scene"):
         for _ in range(40):
-            fog = draw_look(kind, rng, scale)
-            t = fog.time
-            tex = bake(fog.noise.size, fog.noise.octaves, fog.noise.blur, fog.noise.seed)
-            states = {i: simulate(l, t, fog.wind.vector(), flat) for i, l in enumerate(fog.layers)
-                      if l.kind == "particles"}
-            extra = [p for pos, _ in states.values() for p in pos[:8]]
-            O, W, D = draw_rays(fog, rng, RAYS, scale, extra)
-            parts = [raw(fog, O[i], W[i], D[i], t, tex, states) for i in range(RAYS)]
-            fog = tune_density(fog, parts, rng)
+            c = draw_case(kind, rng, scale, RAYS)
+            fog, O, W, D, tex, states, parts, t = c.fog, c.O, c.W, c.D, c.tex, c.states, c.parts, c.fog.time
             got = reference(fog, O, W, D, t, states=states)
             assert np.all(np.isfinite(got)) and np.all((got >= 0) & (got <= 1))
             for i in range(RAYS):

@@ -142,9 +142,10 @@ def direct_density(fog: FogParams) -> float:
     return max(fog.density, FLT_MIN) if fog.density > 0 else 0.0
 
 
-def _slide(layer, fog: FogParams, time: float) -> np.ndarray:
-    """DESIGN: a wind-sensitive density rho(x) becomes rho(x - wind * time)."""
-    return fog.wind.vector() * time if layer.wind else np.zeros(3)
+def _wind(layer, fog: FogParams) -> np.ndarray:
+    """The velocity a layer's density slides with (DESIGN: a wind-sensitive density
+    rho(x) becomes rho(x - wind * time)); 0 for a layer that ignores the wind."""
+    return fog.wind.vector() if layer.wind else np.zeros(3)
 
 
 TWO_PI = Fraction("6.283185307179586476925286766559005768394338798750211641949889184615632812572417997256069650684234136")
@@ -213,7 +214,7 @@ def pack(fog: FogParams, particle_states: dict[int, tuple[np.ndarray, np.ndarray
         if not layer.enabled:
             continue
         v = data[n * LAYER_VEC4:(n + 1) * LAYER_VEC4]
-        Es = E - _slide(layer, fog, time)   # E in the layer's own (unslid) frame
+        Es = E - _wind(layer, fog) * time   # E in the layer's own (unslid) frame
         if isinstance(layer, Homogeneous):
             v[0, 0] = g * layer.density
         elif isinstance(layer, Height):
@@ -223,7 +224,7 @@ def pack(fog: FogParams, particle_states: dict[int, tuple[np.ndarray, np.ndarray
         elif isinstance(layer, Cosine):
             v[0, :3] = (g * layer.density, layer.c0, 1.0 / layer.scale)
             for j, t in enumerate(layer.terms):
-                v[1 + j] = (*t.k, phase_at(t.k, E, _slide(layer, fog, 1.0), time, layer.scale, t.phase))
+                v[1 + j] = (*t.k, phase_at(t.k, E, _wind(layer, fog), time, layer.scale, t.phase))
                 v[9 + j // 4, j % 4] = t.amp
         elif isinstance(layer, Polynomial):
             C = layer.half_width
@@ -231,7 +232,7 @@ def pack(fog: FogParams, particle_states: dict[int, tuple[np.ndarray, np.ndarray
             c[:len(layer.coeffs)] = layer.coeffs
             Q = npoly.polyint(c)  # Q[0] = 0, Q[i+1] = c_i / (i + 1)
             period = npoly.polyval(C, Q) - npoly.polyval(-C, Q)
-            u0 = coordinate_at(layer.axis, E, _slide(layer, fog, 1.0), time, layer.offset,
+            u0 = coordinate_at(layer.axis, E, _wind(layer, fog), time, layer.offset,
                                2 * C if layer.mode == "repeat" else None, C)
             v[0] = (*layer.axis, u0)
             v[1] = (g * layer.density, C, 1.0 if layer.mode == "repeat" else 0.0, period)

@@ -96,5 +96,10 @@ def sample(tex: np.ndarray, x: np.ndarray, scale: float) -> np.ndarray:
 def steps(size: int = 64, octaves: int = 4, blur: int = 2, seed: int = 7) -> tuple[float, float, float]:
     """The largest |difference| between neighbouring texels along x, y and z, wrapping.
     Each partial derivative of the trilinear interpolant is bounded by it (per texel)."""
-    tex = bake(size, octaves, blur, seed).astype(np.float64)
+    return texel_steps(bake(size, octaves, blur, seed))
+
+
+def texel_steps(tex: np.ndarray) -> tuple[float, float, float]:
+    """steps() of a given tile."""
+    tex = tex.astype(np.float64)
     return tuple(float(np.abs(np.roll(tex, -1, axis=a) - tex).max()) for a in range(3))

@@ -18,18 +18,7 @@ NOISE_TOL = 1e-3   # shaders/fog/noise.glsl: the volume mode's target error in o
 def slope_bound(tex, omega, scale):
     """L: a bound on |dn/ds| along each ray (1/m). Each partial derivative of trilinear
     noise is at most the largest neighbouring-texel step along its axis (bake.steps)."""
-    N = tex.shape[0]
-    steps = np.abs(np.roll(tex, -1, 0) - tex).max(), np.abs(np.roll(tex, -1, 1) - tex).max(), \
-        np.abs(np.roll(tex, -1, 2) - tex).max()
-    return N / scale * (np.abs(omega) @ np.asarray(steps, dtype=np.float64))
-
-
-def error_bound(layer, tex, omega, d, weight=1.0):
-    """The volume mode's stated bound on |optical depth - exact integral|: rho L d^2 / (4 S),
-    rho = weight * density (the midpoint rule on an L-Lipschitz function: L h^2 / 4 per
-    interval h)."""
-    n = volume_samples(layer, tex, omega, d, weight)
-    return weight * layer.density * slope_bound(tex, omega, layer.scale) * d * d / (4.0 * n)
+    return tex.shape[0] / scale * (np.abs(omega) @ np.asarray(bake.texel_steps(tex)))
 
 
 def volume_samples(layer, tex, omega, d, weight=1.0):
