@@ -90,7 +90,7 @@ def measure(post, kind: str, scale: str, looks: int, rays: int, seed: int):
 
 def in_process_post():
     from fastapi.testclient import TestClient
-    from fogbank.api import create_app
+    from fogbank.service.api import create_app
     client = TestClient(create_app())
     client.__enter__()
 

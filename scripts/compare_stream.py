@@ -14,8 +14,8 @@ import asyncio
 import statistics
 import sys
 
-from fogbank.bench_stream import delivered_fps
-from fogbank.child import ChildServer
+from fogbank.tools.bench_stream import delivered_fps
+from fogbank.tools.child import ChildServer
 
 
 def start(pythonpath: str | None, env: dict) -> ChildServer:

@@ -10,7 +10,7 @@ import asyncio, json, sys, threading, time, urllib.request, urllib.error, http.c
 from pathlib import Path
 sys.path.insert(0, str(Path(__file__).parent))
 from compare_stream import start
-from fogbank import proctree
+from fogbank.workers import proctree
 import websockets
 
 MB = 2**20

@@ -18,9 +18,9 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT / "tests"), str(ROOT / "server")]
 
-from fogbank.noise import bake  # noqa: E402
-from fogbank.params import FogParams  # noqa: E402
-from fogbank.presets import preset_dict  # noqa: E402
+from fogbank.kinds.noise_bake import bake  # noqa: E402
+from fogbank.model.params import FogParams  # noqa: E402
+from fogbank.model.presets import preset_dict  # noqa: E402
 from quadrature import truth  # noqa: E402
 
 

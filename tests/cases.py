@@ -10,10 +10,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from domain import draw_look, draw_rays
-from fogbank.noise import bake
-from fogbank.params import FogParams
-from fogbank.particles import simulate
-from fogbank.terrain import flat
+from fogbank.kinds.noise_bake import bake
+from fogbank.model.params import FogParams
+from fogbank.kinds.particle_motion import simulate
+from fogbank.scene.terrain import flat
 from quadrature import raw
 
 

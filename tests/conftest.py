@@ -7,7 +7,7 @@ os.environ.setdefault("FOGBANK_GL_BACKEND", "egl")
 
 @pytest.fixture(scope="session")
 def renderer():
-    from fogbank.renderer import Renderer, create_context
+    from fogbank.render.renderer import Renderer, create_context
     return Renderer(create_context("egl"))
 
 
@@ -15,7 +15,7 @@ def renderer():
 def client():
     from fastapi.testclient import TestClient
 
-    from fogbank.api import create_app
+    from fogbank.service.api import create_app
     with TestClient(create_app()) as c:
         yield c
 

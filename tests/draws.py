@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from fogbank.params import (Cosine, CosineTerm, Distance, Height, Homogeneous, Noise, Particles,
+from fogbank.model.params import (Cosine, CosineTerm, Distance, Height, Homogeneous, Noise, Particles,
                             Polynomial, Potential, Sphere, poly_min)
 
 EXPONENTIAL = ["homogeneous", "height", "cosine", "polynomial", "potential", "sphere"]

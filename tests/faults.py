@@ -6,7 +6,7 @@ from __future__ import annotations
 
 def break_sphere_shaders() -> dict:
     """From now on, fog programs with a sphere layer fail to compile in this worker."""
-    import fogbank.renderer as R
+    import fogbank.render.renderer as R
     real = R.layer_code
 
     def broken(key, inline_particles=True):
@@ -23,5 +23,5 @@ def allocate(mb: int) -> dict:
     import numpy as np
     global _held
     _held = np.ones(mb << 18, dtype=np.float32)   # 4 bytes each
-    from fogbank import worker
+    from fogbank.workers import worker
     return worker._run(lambda r: {})

@@ -1,6 +1,6 @@
 """An independent float64 truth for one look's transmittance along one ray.
 
-The densities are written out here again from DESIGN.md, not imported from fogbank.fog,
+The densities are written out here again from DESIGN.md, not imported from fogbank.kinds,
 and each exponential layer's optical depth is integrated numerically with adaptive
 quadrature (scipy's QUADPACK), told where the integrand has its features: a sphere's
 chord ends, a potential's closest approach and width, the lowest point of a height

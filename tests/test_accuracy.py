@@ -15,10 +15,10 @@ import numpy as np
 import pytest
 
 from cases import draw_case
-from fogbank.fog.transmittance import transmittance as reference
-from fogbank.noise import bake
-from fogbank.params import LAYER_CLASSES, FogParams, Height
-from fogbank.presets import preset_dict
+from fogbank.kinds.reference import transmittance as reference
+from fogbank.kinds.noise_bake import bake
+from fogbank.model.params import LAYER_CLASSES, FogParams, Height
+from fogbank.model.presets import preset_dict
 from quadrature import check, compose, noise_bound, truth
 
 KINDS = sorted(LAYER_CLASSES)
@@ -253,7 +253,7 @@ def test_input_beyond_the_contract_is_refused(client, where, patch):
 
 @pytest.mark.parametrize("kind", KINDS)
 def test_float64_references_over_the_schema(kind):
-    """fogbank.fog (the numpy references that mirror the shaders, in float64) against the
+    """fogbank.kinds (the numpy references that mirror the shaders, in float64) against the
     quadrature truth over the same draws: no NaN, and within 1e-6 (volume noise: within
     its stated bound, since the reference takes the shader's samples)."""
     rng = np.random.default_rng(100 + KINDS.index(kind))

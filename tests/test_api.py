@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from fogbank.urlstate import encode
-from fogbank.api import resolve
-from fogbank.params import StillParams
+from fogbank.model.urlstate import encode
+from fogbank.service.api import resolve
+from fogbank.model.params import StillParams
 
 
 def img(resp):

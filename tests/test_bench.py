@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fogbank.bench import _kind_looks, _reference, markdown
+from fogbank.tools.bench import _kind_looks, _reference, markdown
 
 
 @pytest.mark.parametrize("kind", ["homogeneous", "height", "cosine", "polynomial", "potential", "sphere"])
@@ -43,7 +43,7 @@ def test_markdown_report_from_results():
 
 
 def test_process_boundary_is_measured_through_real_workers():
-    from fogbank.bench import process_boundary
+    from fogbank.tools.bench import process_boundary
     pb = process_boundary(n=20)
     assert set(pb) == {"noop_p50_ms", "noop_p90_ms", "frame_handover_p50_ms", "frame_handover_p90_ms"}
     assert 0 < pb["noop_p50_ms"] <= pb["noop_p90_ms"]

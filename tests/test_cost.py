@@ -3,8 +3,8 @@ renderer really allocates for a still."""
 
 from __future__ import annotations
 
-from fogbank import cost
-from fogbank.params import StillParams
+from fogbank.workers import cost
+from fogbank.model.params import StillParams
 
 
 def still(**kw) -> StillParams:
@@ -40,7 +40,7 @@ def test_disabled_layers_cost_nothing():
 
 
 def test_memory_estimate_covers_what_the_renderer_allocates(renderer):
-    from fogbank.renderer import Renderer
+    from fogbank.render.renderer import Renderer
     r = Renderer(renderer.ctx, cache_bytes=1 << 40)
     for look in (still(width=640, height=360), still(width=800, height=600, effects={"blur": "separate"}),
                  still(width=512, height=512, effects={"fog_scale": 2})):

@@ -11,9 +11,9 @@ import pytest
 from fastapi.testclient import TestClient
 
 import faults
-from fogbank import worker
-from fogbank.api import create_app
-from fogbank.protocol import HEADER
+from fogbank.workers import worker
+from fogbank.service.api import create_app
+from fogbank.stream.protocol import HEADER
 
 
 @pytest.fixture

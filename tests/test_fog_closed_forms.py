@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from fogbank.fog import cosine, height, homogeneous, polynomial, potential, sphere
-from fogbank.params import Height, Polynomial, Potential, Sphere
+from fogbank.kinds import cosine, height, homogeneous, polynomial, potential, sphere
+from fogbank.model.params import Height, Polynomial, Potential, Sphere
 from draws import random_layer, unit
 
 MODULES = {"homogeneous": homogeneous, "height": height, "cosine": cosine,

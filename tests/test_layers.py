@@ -8,8 +8,8 @@ import pytest
 from pydantic import ValidationError
 
 from draws import ALL, random_layer
-from fogbank.layers import density_code, layer_code, variant
-from fogbank.params import FogParams
+from fogbank.kinds.packing import density_code, layer_code, variant
+from fogbank.model.params import FogParams
 
 
 def test_generated_glsl_comes_only_from_the_variant_key():

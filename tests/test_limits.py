@@ -16,7 +16,7 @@ import pytest
 from fastapi.testclient import TestClient
 from starlette.websockets import WebSocketDisconnect
 
-from fogbank.api import create_app
+from fogbank.service.api import create_app
 from fogbank.settings import Settings
 
 
@@ -192,7 +192,7 @@ def test_quiet_and_unacknowledging_sockets_are_closed_with_a_reason():
     ("null", "fog.example", "ws", False),
 ])
 def test_origin_is_compared_by_scheme_host_and_port(origin, host, scheme, ok):
-    from fogbank.security import origin_allowed
+    from fogbank.service.security import origin_allowed
     assert origin_allowed(origin, host, "", scheme) is ok
 
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from fogbank.noise import bake, binomial_blur, sample
+from fogbank.kinds.noise_bake import bake, binomial_blur, sample
 
 
 def test_range_and_cache():

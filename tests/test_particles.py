@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from fogbank import terrain
-from fogbank.params import Particles
-from fogbank.particles import simulate, uniform
+from fogbank.scene import terrain
+from fogbank.model.params import Particles
+from fogbank.kinds.particle_motion import simulate, uniform
 
 WIND = np.array([2.0, 0.0, -1.0])
 

@@ -8,7 +8,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from fogbank.protocol import HEADER, MAGIC, ProtocolError, frame_header, parse
+from fogbank.stream.protocol import HEADER, MAGIC, ProtocolError, frame_header, parse
 
 
 def test_valid_messages_parse():

@@ -7,10 +7,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fogbank import camera as cam
-from fogbank import scene as scenes
-from fogbank.fog.transmittance import transmittance as reference
-from fogbank.params import StillParams, srgb_to_linear
+from fogbank.scene import camera as cam
+from fogbank.scene import meshes as scenes
+from fogbank.kinds.reference import transmittance as reference
+from fogbank.model.params import StillParams, srgb_to_linear
 
 W, H = 320, 180
 
@@ -222,8 +222,8 @@ def test_render_targets_are_released_with_their_attachments_and_held_to_budget(r
     """Stills at 24 sizes: the caches stay within their byte budget and memory returns
     (releasing framebuffers without their renderbuffers and textures grew RSS by the
     whole target set per size: 20 stills at 1280..1299 x 720 took 164 MB to 1.84 GB)."""
-    from fogbank import worker
-    from fogbank.renderer import Renderer
+    from fogbank.workers import worker
+    from fogbank.render.renderer import Renderer
     worker._fix_mmap_threshold()
     r = Renderer(renderer.ctx, cache_bytes=96 << 20)
     r.render(StillParams(width=1280, height=720))
@@ -242,7 +242,7 @@ def test_growing_ray_targets_and_dropping_caches_leave_no_gl_error(renderer):
     """Releasing the bound framebuffer left GL_INVALID_OPERATION behind: 100 rays then
     16384 rays failed with a 500."""
     import numpy as np
-    from fogbank.params import FogParams
+    from fogbank.model.params import FogParams
     fog = FogParams()
     for n in (1, 100, 16384):
         O, W = np.zeros((n, 3)), np.tile([1.0, 0.0, 0.0], (n, 1))

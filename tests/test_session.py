@@ -3,8 +3,8 @@ preview while dragging and the refinement after, play/pause and seek."""
 
 from __future__ import annotations
 
-from fogbank.protocol import parse
-from fogbank.session import INPUT_SETTLE_S, MAX_IN_FLIGHT, Session
+from fogbank.stream.protocol import parse
+from fogbank.stream.session import INPUT_SETTLE_S, MAX_IN_FLIGHT, Session
 
 
 def msg(text):

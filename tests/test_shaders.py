@@ -5,7 +5,7 @@ from __future__ import annotations
 import moderngl
 import pytest
 
-from fogbank.shaders import ShaderError, load, program
+from fogbank.render.glsl import ShaderError, load, program
 
 
 def test_includes_once_with_line_directives(tmp_path):
@@ -32,7 +32,7 @@ def test_missing_include_and_cycle(tmp_path):
 
 
 def test_compile_error_names_file_and_line(renderer, tmp_path, monkeypatch):
-    import fogbank.shaders as sh
+    import fogbank.render.glsl as sh
     (tmp_path / "ok.vert").write_text("void main() { gl_Position = vec4(0.0); }\n")
     (tmp_path / "lib.glsl").write_text("float f() {\n  return 1.0;\n}\nfloat g() { return undefined_thing; }\n")
     (tmp_path / "bad.frag").write_text('#include "lib.glsl"\nout vec4 c;\nvoid main() { c = vec4(f()); }\n')
@@ -45,8 +45,8 @@ def test_compile_error_names_file_and_line(renderer, tmp_path, monkeypatch):
 
 
 def test_every_project_shader_compiles(renderer):
-    from fogbank.params import FogParams
-    from fogbank.presets import preset_dict, presets
+    from fogbank.model.params import FogParams
+    from fogbank.model.presets import preset_dict, presets
     for name in presets():
         fog = FogParams.model_validate(preset_dict(name))
         for scale in (1, 2, 4):

@@ -22,7 +22,7 @@ import urllib.request
 import pytest
 import websockets
 
-from fogbank import proctree
+from fogbank.workers import proctree
 from servers import HEAVY, Server, post_still, run_async, watch_stream
 
 def get(url: str, timeout: float = 30) -> tuple[int, float, bytes]:

@@ -10,7 +10,7 @@ import time
 import numpy as np
 from PIL import Image
 
-from fogbank.protocol import HEADER
+from fogbank.stream.protocol import HEADER
 
 VIEW = {"type": "view", "width": 96, "height": 64, "fps": 60, "quality": 80}
 

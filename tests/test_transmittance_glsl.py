@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from draws import ALL, random_layer, random_rays
-from fogbank.fog.transmittance import transmittance as reference
-from fogbank.params import FogParams
+from fogbank.kinds.reference import transmittance as reference
+from fogbank.model.params import FogParams
 
 TOL = 2e-4
 

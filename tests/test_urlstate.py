@@ -10,9 +10,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from draws import ALL, random_layer
-from fogbank import presets as P
-from fogbank.params import FogParams, StillParams
-from fogbank.urlstate import URLError, canonical, decode, encode
+from fogbank.model import presets as P
+from fogbank.model.params import FogParams, StillParams
+from fogbank.model.urlstate import URLError, canonical, decode, encode
 
 finite = st.floats(allow_nan=False, allow_infinity=False, width=64)
 
@@ -91,7 +91,7 @@ def test_presets_round_trip_from_their_own_base():
 
 
 def test_page_keys_are_not_part_of_the_look():
-    from fogbank.urlstate import view_state, view_suffix
+    from fogbank.model.urlstate import view_state, view_suffix
     value, _ = decode("camera.yaw=9&play=0&speed=2", StillParams)
     assert value["camera"]["yaw"] == 9.0
     assert view_state("camera.yaw=9&play=0&speed=2") == {"playing": False, "speed": 2.0}
@@ -104,7 +104,7 @@ def test_a_counted_layer_starts_homogeneous_and_refuses_fields_of_other_kinds():
     first class until `.kind` picks another; a field of another kind is named in the error."""
     from pydantic import ValidationError
 
-    from fogbank.params import StillParams
+    from fogbank.model.params import StillParams
     value, _ = decode("layers=1", StillParams)
     assert StillParams.model_validate(value).layers[0].kind == "homogeneous"
     value, _ = decode("layers=1&layers.0.radius=3", StillParams)
@@ -119,7 +119,7 @@ def test_url_numbers_are_ascii_only(text):
     a look's URL must not have several spellings of one number."""
     from pydantic import ValidationError
 
-    from fogbank.params import StillParams
+    from fogbank.model.params import StillParams
     value, _ = decode("width=" + quote(text), StillParams)
     with pytest.raises(ValidationError) as exc:
         StillParams.model_validate(value)

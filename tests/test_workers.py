@@ -13,9 +13,11 @@ from concurrent.futures import ThreadPoolExecutor
 import faults
 import pytest
 
-from fogbank import metrics, worker
+from fogbank.service import metrics
+
+from fogbank.workers import worker
 from fogbank.settings import Settings
-from fogbank.supervisor import DeadlineExceeded, QueueTimeout, Supervisor, WorkerError
+from fogbank.workers.supervisor import DeadlineExceeded, QueueTimeout, Supervisor, WorkerError
 
 
 def run(coro_fn, settings: Settings):

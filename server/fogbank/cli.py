@@ -12,8 +12,8 @@ from pathlib import Path
 def _still_params(args):
     from pydantic import ValidationError
 
-    from .params import StillParams
-    from .urlstate import URLError, decode
+    from fogbank.model.params import StillParams
+    from fogbank.model.urlstate import URLError, decode
     query = "&".join(args.params)
     if args.preset:
         query = f"preset={args.preset}" + (f"&{query}" if query else "")
@@ -30,11 +30,11 @@ def _still_params(args):
 def cmd_serve(args) -> None:
     import uvicorn
 
-    from . import logs
-    from .api import create_app
-    from .limits import MAX_HEAD_BYTES, json_h11_protocol
-    from .protocol import MAX_MESSAGE
-    from .settings import get_settings
+    from fogbank.service import logs
+    from fogbank.service.api import create_app
+    from fogbank.service.limits import MAX_HEAD_BYTES, json_h11_protocol
+    from fogbank.stream.protocol import MAX_MESSAGE
+    from fogbank.settings import get_settings
     logs.setup()
     base = get_settings()
     settings = base.model_copy(update={"host": args.host or base.host, "port": args.port or base.port})
@@ -56,9 +56,9 @@ def cmd_serve(args) -> None:
 
 
 def cmd_still(args) -> None:
-    from .encode import encode
-    from .renderer import Renderer, create_context
-    from .settings import get_settings
+    from fogbank.render.encode import encode
+    from fogbank.render.renderer import Renderer, create_context
+    from fogbank.settings import get_settings
     still = _still_params(args)
     fmt = {"jpeg": "jpg"}.get(Path(args.out).suffix.lower().lstrip("."), Path(args.out).suffix.lower().lstrip("."))
     if fmt not in ("png", "jpg", "webp"):
@@ -74,11 +74,11 @@ def cmd_gallery(args) -> None:
     """Render every preset at --width x --height as JPEG, timing each (median of --repeat)."""
     import numpy as np
 
-    from .encode import encode
-    from .params import StillParams
-    from .presets import preset_dict, presets
-    from .renderer import Renderer, create_context
-    from .settings import get_settings
+    from fogbank.render.encode import encode
+    from fogbank.model.params import StillParams
+    from fogbank.model.presets import preset_dict, presets
+    from fogbank.render.renderer import Renderer, create_context
+    from fogbank.settings import get_settings
     s = get_settings()
     r = Renderer(create_context(s.gl_backend, s.gl_device))
     out = Path(args.out)
@@ -112,8 +112,8 @@ def cmd_gallery(args) -> None:
 def cmd_bench_stream(args) -> None:
     """Delivered fps and control-to-frame latency against a server (started here unless
     --url is given)."""
-    from .bench_stream import run
-    from .child import ChildServer
+    from fogbank.tools.bench_stream import run
+    from fogbank.tools.child import ChildServer
     srv = None if args.url else ChildServer()
     try:
         rows = run((args.url or srv.url).replace("http", "ws", 1), args.query)
@@ -124,14 +124,14 @@ def cmd_bench_stream(args) -> None:
 
 
 def cmd_bench(args) -> None:
-    from .bench import run
+    from fogbank.tools.bench import run
     run(args.out, quick=args.quick)
 
 
 def cmd_soak(args) -> None:
     """Soak a server started here (so that its memory and log can be read)."""
-    from . import soak
-    from .child import ChildServer
+    from fogbank.tools import soak
+    from fogbank.tools.child import ChildServer
     srv = ChildServer()
     try:
         res = soak.run(srv.url, srv.rss_mb, args.clients, args.seconds, srv.log_text, churn=args.churn)

@@ -1,0 +1,102 @@
+"""Fischer's particle simulation, deterministic from a seed and the time.
+
+Each of `count` slots runs a cycle of `life_max` steps: a particle is born at the slot's
+staggered offset (the emitter has always been running, so t = 0 is already
+in its steady state), lives a random `life_min..life_max` steps, then the slot waits for its
+next cycle. A particle's launch direction (a cone of half-angle `spread`), its life and its
+per-step jitter come from a counter-based hash of (seed, slot, cycle, step), so the state
+at any time t is computed directly, without simulating from t = 0: the same params give
+the same particles on any replica. Motion per step: velocity relaxes toward the wind (or
+still air) at rate `drag`, plus `gravity`; the particle collides with the terrain and
+bounces off it. Positions are interpolated between steps so motion is smooth in time.
+"""
+
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+
+from fogbank.model.params import Particles
+
+_M64 = np.uint64(0xFFFFFFFFFFFFFFFF)
+
+
+def _splitmix(x: np.ndarray) -> np.ndarray:
+    with np.errstate(over="ignore"):
+        x = (x + np.uint64(0x9E3779B97F4A7C15)) & _M64
+        x = ((x ^ (x >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)) & _M64
+        x = ((x ^ (x >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)) & _M64
+        return x ^ (x >> np.uint64(31))
+
+
+def uniform(seed: int, *keys) -> np.ndarray:
+    """Uniform [0, 1) numbers from a hash of the seed and integer keys (broadcast)."""
+    h = np.uint64(seed)
+    h = _splitmix(np.asarray(h))
+    for k in keys:
+        with np.errstate(over="ignore"):
+            h = _splitmix(h ^ np.asarray(k).astype(np.uint64))
+    return (h >> np.uint64(11)).astype(np.float64) / float(1 << 53)
+
+
+def _cone(axis: np.ndarray, spread_rad: float, u1, u2) -> np.ndarray:
+    """Unit vectors uniformly distributed in a cone around `axis`."""
+    a = axis / np.linalg.norm(axis)
+    cos_t = 1.0 - u1 * (1.0 - np.cos(spread_rad))
+    sin_t = np.sqrt(np.maximum(0.0, 1.0 - cos_t**2))
+    phi = 2 * np.pi * u2
+    helper = np.array([1.0, 0.0, 0.0]) if abs(a[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    b1 = np.cross(a, helper)
+    b1 /= np.linalg.norm(b1)
+    b2 = np.cross(a, b1)
+    return (cos_t[:, None] * a + (sin_t * np.cos(phi))[:, None] * b1
+            + (sin_t * np.sin(phi))[:, None] * b2)
+
+
+def simulate(layer: Particles, t: float, wind: np.ndarray,
+             ground: Callable[[np.ndarray, np.ndarray], np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """Positions (M, 3) and strengths s_j = remaining life / initial life (M,) of the
+    particles alive at time t. M <= count."""
+    n = layer.count
+    period = layer.life_max
+    slots = np.arange(n, dtype=np.int64)
+    offset = (slots * period) // n
+    tau = t / layer.step - offset                   # steps since the slot's first birth
+    cycle = np.floor(tau / period).astype(np.int64)
+    age = tau - cycle * period                      # steps since this cycle's birth
+    life = layer.life_min + np.floor(
+        uniform(layer.seed, slots, cycle, 0) * (layer.life_max - layer.life_min + 1))
+    alive = age < life   # cycles before t = 0 count too: the emitter is warm at t = 0
+    if not np.any(alive):
+        return np.zeros((0, 3)), np.zeros(0)
+    slots, cycle, age, life = slots[alive], cycle[alive], age[alive], life[alive]
+
+    direction = _cone(np.asarray(layer.direction, dtype=np.float64),
+                      np.radians(layer.spread), uniform(layer.seed, slots, cycle, 1),
+                      uniform(layer.seed, slots, cycle, 2))
+    v = direction * layer.speed
+    p = np.broadcast_to(np.asarray(layer.emitter, dtype=np.float64), v.shape).copy()
+    target = np.asarray(wind, dtype=np.float64) if layer.wind else np.zeros(3)
+    dt = layer.step
+    steps = np.floor(age).astype(np.int64)
+    prev = p.copy()
+    for k in range(int(steps.max()) + 1):
+        moving = steps >= k  # after this step, positions at step k+1 are needed by age >= k
+        jitter = np.stack([uniform(layer.seed, slots, cycle, 100 + 3 * k + i) for i in range(3)],
+                          axis=1) - 0.5
+        nv = v + (target - v) * min(1.0, layer.drag * dt)
+        nv = nv + np.array([0.0, layer.gravity * dt, 0.0]) + jitter * (0.3 * layer.speed + 0.2) * dt
+        npos = p + nv * dt
+        g = ground(npos[:, 0], npos[:, 2])
+        hit = npos[:, 1] < g
+        npos[:, 1] = np.where(hit, g, npos[:, 1])
+        nv[:, 1] = np.where(hit, np.abs(nv[:, 1]) * 0.3, nv[:, 1])
+        nv[:, [0, 2]] = np.where(hit[:, None], nv[:, [0, 2]] * 0.7, nv[:, [0, 2]])
+        prev = np.where((steps == k)[:, None], p, prev)
+        p = np.where(moving[:, None], npos, p)
+        v = np.where(moving[:, None], nv, v)
+    frac = (age - steps)[:, None]
+    pos = prev + (p - prev) * frac
+    strength = (life - age) / life
+    return pos, strength

@@ -1,0 +1,169 @@
+"""Named looks. "default" is the base every URL and request patches; the others recreate
+the seeds' figures on the countryside scene.
+
+A preset is a patch over the model's field defaults (FogParams()); `resolve` merges a
+patch over a preset: objects merge field by field, lists are replaced whole.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from functools import lru_cache
+from typing import Any
+
+from fogbank.scene.meshes import landmarks
+
+PI = math.pi
+
+
+def _house_chimney() -> tuple[float, float, float]:
+    hx, hy, hz = landmarks().house
+    return (hx + 2.65, hy + 7.2, hz - 0.75)
+
+
+def _biri_fig6_layer(density: float = 0.012, scale: float = 20.0) -> dict:
+    # K = 1 + 1/2 cos(5 pi y) + 1/5 cos(7 pi (y + 0.1 x)) + 1/5 cos(5 pi (y - 0.05 x))
+    #       + 1/10 cos(pi x) cos(pi z / 2)      (the product expanded into two cosines)
+    return {"kind": "cosine", "density": density, "c0": 1.0, "scale": scale, "wind": True,
+            "terms": [{"amp": 0.5, "k": (0.0, 5 * PI, 0.0), "phase": 0.0},
+                      {"amp": 0.2, "k": (0.7 * PI, 7 * PI, 0.0), "phase": 0.0},
+                      {"amp": 0.2, "k": (-0.25 * PI, 5 * PI, 0.0), "phase": 0.0},
+                      {"amp": 0.05, "k": (PI, 0.0, PI / 2), "phase": 0.0},
+                      {"amp": 0.05, "k": (PI, 0.0, -PI / 2), "phase": 0.0}]}
+
+
+def _presets() -> dict[str, dict[str, Any]]:
+    hx, hy, hz = landmarks().house
+    bx, by, bz = landmarks().bridge
+    fx, fy, fz = landmarks().forest
+    view = {"position": (-15.0, 34.0, 95.0), "yaw": 5.0, "pitch": -13.0, "fov": 60.0}
+    house_view = {"position": (-58.0, 22.0, 12.0), "yaw": 25.0, "pitch": -8.0, "fov": 55.0}
+    smoke = {"kind": "particles", "count": 64, "emitter": _house_chimney(), "direction": (0.0, 1.0, 0.0),
+             "spread": 12.0, "speed": 2.2, "life_min": 8, "life_max": 16, "step": 0.45,
+             "radius": 1.6, "alpha": 0.85, "drag": 0.35, "gravity": 0.3, "wind": True, "seed": 3}
+    return {
+        "default": {
+            "title": "Morning valley",
+            "description": "Ground mist pooled in the river valley (height fog), drifting "
+                           "Biri cosine layers, denser air in the forest (a point potential), "
+                           "chimney smoke, low sun scattering through it.",
+            "params": {
+                "camera": view, "fog_color": "#c9d1db",
+                "sun": {"azimuth": 55.0, "elevation": 16.0, "color": "#ffe3b8", "intensity": 3.2},
+                "effects": {"scatter": 0.12, "scatter_exponent": 12.0, "sky_distance": 350.0,
+                            "fog_scale": 1},
+                "layers": [
+                    {"kind": "height", "density": 0.035, "falloff": 0.2, "base": 1.0},
+                    _biri_fig6_layer(0.0025, 24.0),
+                    {"kind": "potential", "shape": "point", "center": (fx, fy, fz), "strength": 0.6,
+                     "c": 30.0, "e": 0.05},
+                    smoke,
+                ],
+            },
+        },
+        "biri-fig6": {
+            "title": "Biri et al. 2002, figure 6",
+            "description": "Fog from four cosine functions plus one constant (the product term "
+                           "expanded into two cosines), 20 m per function unit, wind-driven.",
+            "params": {"camera": view, "layers": [_biri_fig6_layer()],
+                       "effects": {"cutoff_distance": 500.0}},
+        },
+        "biri-fig7": {
+            "title": "Biri et al. 2002, figure 7",
+            "description": "Two fourth-degree polynomials {0.8, -1, 0, 0, 1} tiled on X and Z, "
+                           "their minimum on the house: its middle is clear, its ends in mist.",
+            "params": {"camera": house_view,
+                       "effects": {"cutoff_distance": 500.0},
+                       "layers": [
+                           {"kind": "polynomial", "density": 0.014, "coeffs": [0.8, -1.0, 0.0, 0.0, 1.0],
+                            "axis": (1 / 12.0, 0.0, 0.0), "offset": 0.63 - hx / 12.0, "half_width": 1.0},
+                           {"kind": "polynomial", "density": 0.014, "coeffs": [0.8, -1.0, 0.0, 0.0, 1.0],
+                            "axis": (0.0, 0.0, 1 / 12.0), "offset": 0.63 - hz / 12.0, "half_width": 1.0}]},
+        },
+        "biri-fig8": {
+            "title": "Biri et al. 2002, figure 8",
+            "description": "Constant fog with four point potentials centred on trees: the mist "
+                           "gathers around them.",
+            "params": {"camera": {"position": (20.0, 30.0, 30.0), "yaw": 40.0, "pitch": -14.0, "fov": 55.0},
+                       "effects": {"cutoff_distance": 500.0},
+                       "layers": [{"kind": "homogeneous", "density": 0.004}] + [
+                           {"kind": "potential", "shape": "point", "center": c, "strength": 1.2,
+                            "c": 20.0, "e": 0.12} for c in landmarks().trees]},
+        },
+        "quilez-spheres": {
+            "title": "Quilez: analytic fog spheres",
+            "description": "Spheres of fog, density 1 - r^2, integrated in closed form and "
+                           "clipped by the depth buffer.",
+            "params": {"camera": view, "layers": [
+                {"kind": "sphere", "center": (hx, hy, hz), "radius": 16.0, "density": 0.12},
+                {"kind": "sphere", "center": (bx, by + 2.0, bz), "radius": 14.0, "density": 0.15},
+                {"kind": "sphere", "center": (fx, fy, fz), "radius": 30.0, "density": 0.06}]},
+        },
+        "fischer-fog": {
+            "title": "Fischer: particle fog",
+            "description": "Fog from a few hundred free particles (life 64-128 steps, max "
+                           "opacity 0.2) rising off the river at the bridge, carried by the wind.",
+            "params": {"camera": view, "time": 20.0, "wind": {"direction": 100.0, "speed": 1.2},
+                       "layers": [{"kind": "particles", "count": 240, "emitter": (bx, 0.5, bz - 10.0),
+                                   "direction": (0.0, 1.0, 0.0), "spread": 80.0, "speed": 1.0,
+                                   "life_min": 64, "life_max": 128, "step": 0.25, "radius": 7.0,
+                                   "alpha": 0.2, "drag": 0.3, "wind": True, "seed": 11}]},
+        },
+        "fischer-smoke": {
+            "title": "Fischer: chimney smoke",
+            "description": "Smoke from a few particles (life 8-16 steps, opacity near 1) out of "
+                           "the house's chimney, bent by the wind.",
+            "params": {"camera": house_view, "time": 12.0, "wind": {"direction": 80.0, "speed": 2.0},
+                       "layers": [smoke]},
+        },
+        "perlin-fog": {
+            "title": "Perlin fog with height falloff",
+            "description": "The course write-up's fog: baked fractal Perlin noise, "
+                           "f = exp(-rho d n), n -> n dY^2 / 2 + 0.001, drifting with the wind.",
+            "params": {"camera": {"position": (-30.0, 60.0, 120.0), "yaw": 12.0, "pitch": -20.0, "fov": 60.0},
+                       "effects": {"cutoff_distance": 600.0},
+                       "layers": [{"kind": "noise", "mode": "surface", "density": 0.004, "scale": 70.0,
+                                   "height_falloff": True, "falloff_scale": 20.0, "wind": True}]},
+        },
+        "gawron-distance": {
+            "title": "Gawron & Boryczka 2018: distance fog",
+            "description": "Distance fog with noise-varied density, orange sun in-scattering and "
+                           "a Gaussian blur that grows with the fog.",
+            "params": {"camera": view, "fog_color": "#a9bcd9",
+                       "sun": {"azimuth": 30.0, "elevation": 9.0, "color": "#ffb066", "intensity": 3.0},
+                       "effects": {"scatter": 0.22, "scatter_exponent": 6.0, "blur": "single",
+                                   "blur_radius": 3.0},
+                       "layers": [{"kind": "distance", "start": 10.0, "distance": 260.0, "exponent": 0.55,
+                                   "low": 0.8, "high": 1.2, "max": 0.75, "noise_scale": 90.0, "wind": True}]},
+        },
+    }
+
+
+@lru_cache(maxsize=1)
+def presets() -> dict[str, dict[str, Any]]:
+    return _presets()
+
+
+def merge(base: Any, patch: Any) -> Any:
+    """Objects merge key by key; anything else (lists included) replaces."""
+    if isinstance(base, dict) and isinstance(patch, dict):
+        out = dict(base)
+        for k, v in patch.items():
+            out[k] = merge(base.get(k), v) if k in base else v
+        return out
+    return patch
+
+
+@lru_cache(maxsize=32)
+def _preset_json(name: str) -> str:
+    from fogbank.model.params import FogParams
+    if name not in presets():
+        raise KeyError(name)
+    base = FogParams().model_dump(mode="json")
+    return FogParams.model_validate(merge(base, presets()[name]["params"])).model_dump_json()
+
+
+def preset_dict(name: str) -> dict:
+    """The preset's full params as a fresh plain dict (validated once, safe to mutate)."""
+    return json.loads(_preset_json(name))

@@ -1,0 +1,328 @@
+"""The URL codec, derived from the params model.
+
+A look is a readable query string of dotted field paths, defaults left out:
+
+    v=1&camera.yaw=12&wind.speed=3&layers=2&layers.0.kind=height&layers.0.density=0.05
+    &layers.1.kind=sphere&layers.1.center=0,8,0
+
+- Objects are walked field by field; a leaf equal to the base is left out.
+- A list of objects (layers, cosine terms) equal to the base is left out; otherwise its
+  length is written (`layers=2`) and each item is written against its own class's
+  defaults (`kind` always written, it chooses the class).
+- Vectors and coefficient lists are comma-separated; colours drop the '#'; numbers use
+  the shortest text that reads back to the same float.
+- The base is the "default" preset, or the preset named by `preset=`. `v` is the
+  codec version (1).
+
+encode(decode(q)) is the canonical form of q; decode(encode(p)) == p.
+"""
+
+from __future__ import annotations
+
+import re
+from typing import Annotated, Any, Literal, Union, get_args, get_origin
+from urllib.parse import parse_qsl, quote
+
+from pydantic import BaseModel
+
+from fogbank.model import presets as P
+from fogbank.model.params import LAYER_CLASSES, FogParams, StillParams
+
+VERSION = 1
+# Page-only keys: how the page plays the look, not the look. A still ignores them.
+VIEW_KEYS = ("play", "speed")
+_SAFE = ",.-_~"
+_HEX = re.compile(r"^#[0-9a-f]{6}$")
+_NUMBER = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?|[+-]?(inf|nan|infinity)", re.I | re.A)
+MAX_QUERY = 16384
+MAX_LIST = 64
+
+
+class URLError(ValueError):
+    """A malformed query; `errors` are FastAPI-shaped {loc, msg, type} dicts."""
+
+    def __init__(self, errors: list[dict[str, Any]]):
+        super().__init__("; ".join(f"{'.'.join(map(str, e['loc']))}: {e['msg']}" for e in errors))
+        self.errors = errors
+
+
+# ---------------------------------------------------------------- types from the model
+
+
+def _unwrap(ann: Any) -> Any:
+    while get_origin(ann) is Annotated:
+        ann = get_args(ann)[0]
+    return ann
+
+
+def _item_class(ann: Any, item: Any) -> type[BaseModel] | None:
+    """The model class of a list item (discriminated unions pick it by `kind`)."""
+    ann = _unwrap(ann)
+    if get_origin(ann) is Union:
+        kind = item.get("kind") if isinstance(item, dict) else None
+        return LAYER_CLASSES.get(kind)
+    if isinstance(ann, type) and issubclass(ann, BaseModel):
+        return ann
+    return None
+
+
+def _first_class(ann: Any) -> type[BaseModel] | None:
+    ann = _unwrap(ann)
+    if get_origin(ann) is Union:
+        return _unwrap(get_args(ann)[0])
+    return None
+
+
+def _list_arg(ann: Any) -> Any | None:
+    ann = _unwrap(ann)
+    if get_origin(ann) is list:
+        return get_args(ann)[0]
+    return None
+
+
+def _format(v: Any) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, float):
+        if v.is_integer() and abs(v) < 1e15:
+            return str(int(v))
+        return repr(v)
+    if isinstance(v, (list, tuple)):
+        return ",".join(_format(x) for x in v)
+    if isinstance(v, str) and _HEX.match(v):
+        return v[1:]
+    return str(v)
+
+
+def _parse(ann: Any, text: str) -> Any:
+    """Convert one query value to what the annotation expects; on doubt return the text
+    and let pydantic report the problem."""
+    ann = _unwrap(ann)
+    origin = get_origin(ann)
+    if origin in (tuple, list):
+        args = get_args(ann)
+        elem = args[0] if args else str
+        return [_parse(elem, part) for part in text.split(",")] if text else []
+    if origin is Literal:
+        for lit in get_args(ann):
+            if str(lit) == text:
+                return lit
+        return text
+    if ann is bool:
+        return {"true": True, "1": True, "false": False, "0": False}.get(text.lower(), text)
+    if ann in (int, float) and not _NUMBER.fullmatch(text):
+        return text   # Python would read '１６', '1_6' or ' 16 ': a URL number is ASCII only
+    if ann is int:
+        try:
+            return int(text)
+        except ValueError:
+            return text
+    if ann is float:
+        try:
+            return float(text)
+        except ValueError:
+            return text
+    return text
+
+
+# ---------------------------------------------------------------- encode
+
+
+def _diff(cls: type[BaseModel], value: dict, base: dict, prefix: str, out: list[tuple[str, str]]):
+    for name, field in cls.model_fields.items():
+        if name not in value:
+            continue
+        v, b = value[name], base.get(name) if isinstance(base, dict) else None
+        key = f"{prefix}{name}"
+        ann = _unwrap(field.annotation)
+        if isinstance(ann, type) and issubclass(ann, BaseModel):
+            _diff(ann, v, b or {}, key + ".", out)
+            continue
+        item_ann = _list_arg(ann)
+        if item_ann is not None and v and isinstance(v[0], dict):
+            if v == b:
+                continue
+            out.append((key, str(len(v))))
+            for i, item in enumerate(v):
+                icls = _item_class(item_ann, item)
+                idef = icls().model_dump(mode="json")
+                if "kind" in idef:   # always written: it chooses the item's class
+                    out.append((f"{key}.{i}.kind", str(item["kind"])))
+                _diff(icls, item, idef, f"{key}.{i}.", out)
+            continue
+        if item_ann is not None and not v and b and isinstance(b[0], dict):
+            out.append((key, "0"))   # an emptied list of objects
+            continue
+        if v != b:
+            out.append((key, _format(v)))
+
+
+def encode(params: FogParams, base: str = "default") -> str:
+    """The canonical query string of `params`, written against the preset `base`."""
+    cls = type(params)
+    value = params.model_dump(mode="json")
+    basis = P.preset_dict(base)
+    if cls is StillParams:
+        basis = {**basis, "width": StillParams.model_fields["width"].default,
+                 "height": StillParams.model_fields["height"].default}
+    pairs: list[tuple[str, str]] = [("v", str(VERSION))]
+    if base != "default":
+        pairs.append(("preset", base))
+    _diff(cls, value, basis, "", pairs)
+    return "&".join(f"{k}={quote(v, safe=_SAFE)}" for k, v in pairs)
+
+
+# ---------------------------------------------------------------- decode
+
+
+def _field_ann(cls: type[BaseModel] | None, name: str) -> Any:
+    if cls is None or name not in cls.model_fields:
+        return None
+    return cls.model_fields[name].annotation
+
+
+def decode(query: str, cls: type[FogParams] = FogParams) -> tuple[dict, str]:
+    """Query string -> (params dict ready for validation, base preset name).
+
+    The dict is the base preset with the query's fields patched in; validating it with
+    `cls` gives the params. Raises URLError for a malformed query.
+    """
+    if len(query) > MAX_QUERY:
+        raise URLError([{"loc": ["query"], "msg": f"query longer than {MAX_QUERY} characters",
+                         "type": "url_too_long"}])
+    try:
+        pairs = parse_qsl(query, keep_blank_values=True, strict_parsing=bool(query),
+                          max_num_fields=1000)
+    except ValueError as exc:
+        raise URLError([{"loc": ["query"], "msg": f"malformed query string: {exc}",
+                         "type": "url_malformed"}]) from None
+    fields: dict[str, str] = {}
+    errors: list[dict[str, Any]] = []
+    for k, v in pairs:
+        if k in fields:
+            _err(errors, k, "given more than once", "url_duplicate")
+        fields[k] = v
+    for key in VIEW_KEYS:
+        fields.pop(key, None)
+    version = fields.pop("v", str(VERSION))
+    if version != str(VERSION):
+        _err(errors, "v", f"unknown URL version {version!r}; this server reads version {VERSION}",
+             "url_version")
+    base = fields.pop("preset", "default")
+    if base not in P.presets():
+        _err(errors, "preset", f"unknown preset {base!r}; one of {', '.join(P.presets())}",
+             "url_preset")
+        base = "default"
+    if errors:
+        raise URLError(errors)
+    value: dict = P.preset_dict(base)
+    if cls is StillParams:
+        value = {**value, "width": StillParams.model_fields["width"].default,
+                 "height": StillParams.model_fields["height"].default}
+    # shallow keys first, and an item's `kind` before its other fields, so that lists
+    # exist and items are filled from their class's defaults before fields are patched
+    for key in sorted(fields, key=lambda k: (k.count("."), not k.endswith(".kind"), k)):
+        _set(cls, value, key, fields[key], errors)
+    if errors:
+        raise URLError(errors)
+    return value, base
+
+
+def _err(errors, key, msg, kind="url_field"):
+    errors.append({"loc": ["query", key], "msg": msg, "type": kind})
+
+
+def _set(cls, value, key, text, errors) -> None:
+    """Patch one query field into the nested dict `value`, converting by the model's types."""
+    parts = key.split(".")
+    node: Any = value
+    ncls: Any = cls          # model class of a dict node; item annotation of a list node
+    for i, part in enumerate(parts):
+        last = i == len(parts) - 1
+        if isinstance(node, list):
+            if not part.isdigit() or int(part) >= len(node):
+                _err(errors, key, f"index {part!r} is out of range: set "
+                     f"{'.'.join(parts[:i])}=<count> first", "url_index")
+                return
+            if last:
+                _err(errors, key, "a list item is set field by field")
+                return
+            node = node[int(part)]
+            ncls = _item_class(ncls, node)
+            if ncls is None and not (parts[i + 1] == "kind" and i + 1 == len(parts) - 1):
+                _err(errors, key, f"set {'.'.join(parts[:i + 1])}.kind first", "url_kind")
+                return
+            continue
+        if part == "kind" and last and isinstance(node, dict) and (
+                not node or ("kind" in node and node["kind"] != text)):
+            # a new (or re-kinded) layer: `kind` picks its class and fills its defaults
+            if text not in LAYER_CLASSES:
+                _err(errors, key, f"unknown layer kind {text!r}; one of {', '.join(LAYER_CLASSES)}",
+                     "url_kind")
+                return
+            node.clear()
+            node.update(LAYER_CLASSES[text]().model_dump(mode="json"))
+            return
+        if not isinstance(node, dict) or ncls is None:
+            _err(errors, key, "no such field")
+            return
+        ann = _field_ann(ncls, part)
+        if ann is None:
+            if last:
+                node[part] = text   # unknown: validation names it ("extra inputs")
+            else:
+                _err(errors, key, "no such field")
+            return
+        item_ann = _list_arg(ann)
+        is_object_list = item_ann is not None and (
+            get_origin(_unwrap(item_ann)) is Union or _item_class(item_ann, {}) is not None)
+        if last:
+            if is_object_list:
+                if not text.isdigit() or int(text) > MAX_LIST:
+                    _err(errors, key, f"a list length is an integer 0..{MAX_LIST}", "url_count")
+                    return
+                # items start from their class's defaults; in a union (layers) from its
+                # first class's, until `.N.kind` picks another
+                fixed = _item_class(item_ann, {}) or _first_class(item_ann)
+                node[part] = [fixed().model_dump(mode="json") if fixed else {}
+                              for _ in range(int(text))]
+            else:
+                node[part] = _parse(ann, text)
+            return
+        if part not in node:
+            _err(errors, key, "no such field")
+            return
+        node = node[part]
+        unwrapped = _unwrap(ann)
+        ncls = item_ann if is_object_list else (
+            unwrapped if isinstance(unwrapped, type) and issubclass(unwrapped, BaseModel) else None)
+
+
+def view_state(query: str) -> dict[str, Any]:
+    """The page-only keys of a query: {"playing": bool, "speed": float} where given.
+    Values that do not parse are ignored (they never change the look)."""
+    out: dict[str, Any] = {}
+    for k, v in parse_qsl(query, keep_blank_values=True):
+        if k == "play" and v in ("0", "1"):
+            out["playing"] = v == "1"
+        elif k == "speed":
+            try:
+                f = float(v)
+            except ValueError:
+                continue
+            if -100 <= f <= 100:
+                out["speed"] = f
+    return out
+
+
+def view_suffix(playing: bool, speed: float) -> str:
+    """The page-only keys that differ from the defaults (playing at speed 1)."""
+    out = "" if playing else "&play=0"
+    if speed != 1.0:
+        out += f"&speed={_format(float(speed))}"
+    return out
+
+
+def canonical(query: str, cls: type[FogParams] = FogParams) -> str:
+    value, base = decode(query, cls)
+    return encode(cls.model_validate(value), base)

@@ -1,0 +1,28 @@
+// Perlin fog write-up: a baked, tiling fractal-noise texture n(x) in [0, 1].
+// Trilinear interpolation is done here with texelFetch rather than by the sampler:
+// hardware filtering weights have as few as 8 bits on many GPUs (llvmpipe too), an
+// error of up to 1/512 of a texel step that the float64 reference would see.
+// x in m (relative to the reference point), invScale = tiles per metre, off = the
+// reference point's position in tiles (wind slide included), reduced to [0, 1) in float64
+// on the CPU. Texel centres at (i + 0.5) / N, as in GL.
+float noiseSample(sampler3D tex, vec3 x, float invScale, vec3 off) {
+    int n = textureSize(tex, 0).x;
+    float N = float(n);
+    vec3 t = x * invScale;
+    t -= floor(t);                            // whole tiles first: keeps the sum below small
+    vec3 p = fract(t + off) * N - 0.5;
+    p -= N * floor(p / N);                    // wrap into [0, N) before taking integers
+    vec3 f = fract(p);
+    ivec3 i0 = ivec3(floor(p)) % n;
+    ivec3 i1 = (i0 + 1) % n;                  // both non-negative, so % is well defined
+    float c000 = texelFetch(tex, ivec3(i0.x, i0.y, i0.z), 0).r;
+    float c100 = texelFetch(tex, ivec3(i1.x, i0.y, i0.z), 0).r;
+    float c010 = texelFetch(tex, ivec3(i0.x, i1.y, i0.z), 0).r;
+    float c110 = texelFetch(tex, ivec3(i1.x, i1.y, i0.z), 0).r;
+    float c001 = texelFetch(tex, ivec3(i0.x, i0.y, i1.z), 0).r;
+    float c101 = texelFetch(tex, ivec3(i1.x, i0.y, i1.z), 0).r;
+    float c011 = texelFetch(tex, ivec3(i0.x, i1.y, i1.z), 0).r;
+    float c111 = texelFetch(tex, ivec3(i1.x, i1.y, i1.z), 0).r;
+    return mix(mix(mix(c000, c100, f.x), mix(c010, c110, f.x), f.y),
+               mix(mix(c001, c101, f.x), mix(c011, c111, f.x), f.y), f.z);
+}

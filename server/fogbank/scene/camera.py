@@ -1,0 +1,83 @@
+"""Camera basis, view and projection matrices, and the view ray through a pixel."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from fogbank.model.params import Camera
+
+NEAR = 0.25   # m
+FAR = 4000.0  # m
+
+
+@dataclass(frozen=True)
+class View:
+    eye: np.ndarray
+    fwd: np.ndarray
+    right: np.ndarray   # scaled by tan(fov/2) * aspect
+    up: np.ndarray      # scaled by tan(fov/2)
+    view_proj: np.ndarray
+
+    def ray(self, px: np.ndarray, py: np.ndarray, width: int, height: int) -> np.ndarray:
+        """Unit world directions through pixel centres (px, py), py counted from the bottom."""
+        nx = (np.asarray(px) + 0.5) / width * 2 - 1
+        ny = (np.asarray(py) + 0.5) / height * 2 - 1
+        w = self.fwd + nx[..., None] * self.right + ny[..., None] * self.up
+        return w / np.linalg.norm(w, axis=-1, keepdims=True)
+
+
+def basis(cam: Camera) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Forward, right, up (unit). Yaw 0 looks along -z; positive yaw turns right (+x)."""
+    y, p = math.radians(cam.yaw), math.radians(cam.pitch)
+    fwd = np.array([math.sin(y) * math.cos(p), math.sin(p), -math.cos(y) * math.cos(p)])
+    right = np.array([math.cos(y), 0.0, math.sin(y)])
+    up = np.cross(right, fwd)
+    return fwd, right, up
+
+
+def look_at(eye, fwd, right, up) -> np.ndarray:
+    m = np.eye(4)
+    m[0, :3], m[1, :3], m[2, :3] = right, up, -fwd
+    m[:3, 3] = -m[:3, :3] @ eye
+    return m
+
+
+def perspective(fov_y_deg: float, aspect: float, near: float = NEAR, far: float = FAR) -> np.ndarray:
+    f = 1.0 / math.tan(math.radians(fov_y_deg) / 2)
+    m = np.zeros((4, 4))
+    m[0, 0], m[1, 1] = f / aspect, f
+    m[2, 2], m[2, 3] = (far + near) / (near - far), 2 * far * near / (near - far)
+    m[3, 2] = -1.0
+    return m
+
+
+def view(cam: Camera, width: int, height: int) -> View:
+    aspect = width / height
+    fwd, right, up = basis(cam)
+    tan = math.tan(math.radians(cam.fov) / 2)
+    eye = np.asarray(cam.position, dtype=np.float64)
+    vp = perspective(cam.fov, aspect) @ look_at(eye, fwd, right, up)
+    return View(eye, fwd, right * tan * aspect, up * tan, vp)
+
+
+def ortho_sun(direction: np.ndarray, center: np.ndarray, half: float) -> np.ndarray:
+    """View-projection of an orthographic camera looking along -direction (toward the
+    ground from the sun), covering a cube of half-size `half` around `center`."""
+    L = np.asarray(direction, dtype=np.float64)
+    L = L / np.linalg.norm(L)
+    fwd = -L
+    helper = np.array([0.0, 1.0, 0.0]) if abs(fwd[1]) < 0.99 else np.array([1.0, 0.0, 0.0])
+    right = np.cross(fwd, helper)
+    right /= np.linalg.norm(right)
+    up = np.cross(right, fwd)
+    eye = center + L * half * 2
+    m = np.zeros((4, 4))
+    m[0, 0] = m[1, 1] = 1.0 / half
+    m[2, 2] = -1.0 / (2 * half)
+    m[2, 3] = -1.0
+    m[3, 3] = 1.0
+    # z maps [0, 4 half] in front of the eye to [-1, 1]
+    return m @ look_at(eye, fwd, right, up)

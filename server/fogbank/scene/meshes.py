@@ -1,0 +1,294 @@
+"""Deterministic procedural scenes as vertex arrays (numpy, no GL).
+
+Vertex layout: position (3), normal (3), albedo in linear RGB (3), material (1):
+0 = vertex colour, 1 = terrain (albedo made in the shader), 2 = water, 3 = unlit.
+
+"countryside" is the seeds' kind of view: hills and a river valley, the river with a
+bridge, a road over it, a house, a forest. "calibration" is a flat ground plane and
+boxes of known colours, unlit, for tests that check colours exactly.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+
+from fogbank.scene import terrain
+from fogbank.model.params import srgb_to_linear
+
+VERTEX_FLOATS = 10
+CHUNKS = 8   # terrain chunks per side
+
+
+@dataclass(frozen=True)
+class Mesh:
+    terrain_vertices: np.ndarray   # (N, 10) float32, indexed
+    terrain_indices: np.ndarray    # (M,) uint32, chunk after chunk
+    terrain_chunks: np.ndarray     # (K, 5): first index, index count, centre x, y, z
+    objects: np.ndarray            # (K, 10) float32, plain triangles
+    bounds: tuple[np.ndarray, float]  # centre and half-size, for the shadow map
+
+
+@dataclass(frozen=True)
+class Landmarks:
+    house: tuple[float, float, float]
+    bridge: tuple[float, float, float]
+    trees: tuple[tuple[float, float, float], ...]     # crown centres, the first four named
+    forest: tuple[float, float, float]
+
+
+def _rgb(hex_: str) -> np.ndarray:
+    return np.array(srgb_to_linear(hex_))
+
+
+def _tris(pos: np.ndarray, nrm: np.ndarray, color, material: float) -> np.ndarray:
+    out = np.zeros((len(pos), VERTEX_FLOATS), np.float32)
+    out[:, 0:3], out[:, 3:6] = pos, nrm
+    out[:, 6:9] = np.broadcast_to(np.asarray(color, dtype=np.float64), (len(pos), 3))
+    out[:, 9] = material
+    return out
+
+
+def _quad(a, b, c, d, color, material=0.0) -> np.ndarray:
+    """Two triangles a-b-c, a-c-d with the flat normal of (b - a) x (c - a)."""
+    pos = np.array([a, b, c, a, c, d], dtype=np.float64)
+    n = np.cross(np.subtract(b, a), np.subtract(c, a))
+    n = n / np.linalg.norm(n)
+    return _tris(pos, np.tile(n, (6, 1)), color, material)
+
+
+def box(lo, hi, color, material=0.0) -> np.ndarray:
+    x0, y0, z0 = lo
+    x1, y1, z1 = hi
+    faces = [
+        ((x0, y0, z1), (x1, y0, z1), (x1, y1, z1), (x0, y1, z1)),  # +z
+        ((x1, y0, z0), (x0, y0, z0), (x0, y1, z0), (x1, y1, z0)),  # -z
+        ((x1, y0, z1), (x1, y0, z0), (x1, y1, z0), (x1, y1, z1)),  # +x
+        ((x0, y0, z0), (x0, y0, z1), (x0, y1, z1), (x0, y1, z0)),  # -x
+        ((x0, y1, z1), (x1, y1, z1), (x1, y1, z0), (x0, y1, z0)),  # +y
+        ((x0, y0, z0), (x1, y0, z0), (x1, y0, z1), (x0, y0, z1)),  # -y
+    ]
+    return np.concatenate([_quad(*f, color, material) for f in faces])
+
+
+def cone(base, radius, height, color, segments=14) -> np.ndarray:
+    """A cone with smooth side normals (tree crowns), open bottom."""
+    bx, by, bz = base
+    a = np.linspace(0, 2 * np.pi, segments + 1)
+    ring = np.stack([bx + radius * np.cos(a), np.full_like(a, by), bz + radius * np.sin(a)], 1)
+    tip = np.array([bx, by + height, bz])
+    slope = radius / height
+    nrm = np.stack([np.cos(a), np.full_like(a, slope), np.sin(a)], 1)
+    nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
+    pos, nn = [], []
+    for i in range(segments):
+        mid = (nrm[i] + nrm[i + 1]) / 2
+        pos += [ring[i + 1], ring[i], tip]
+        nn += [nrm[i + 1], nrm[i], mid / np.linalg.norm(mid)]
+    return _tris(np.array(pos), np.array(nn), color, 0.0)
+
+
+def cylinder(base, radius, height, color, segments=8) -> np.ndarray:
+    bx, by, bz = base
+    a = np.linspace(0, 2 * np.pi, segments + 1)
+    pos, nn = [], []
+    for i in range(segments):
+        c0, s0, c1, s1 = np.cos(a[i]), np.sin(a[i]), np.cos(a[i + 1]), np.sin(a[i + 1])
+        p00 = (bx + radius * c0, by, bz + radius * s0)
+        p10 = (bx + radius * c1, by, bz + radius * s1)
+        p01 = (p00[0], by + height, p00[2])
+        p11 = (p10[0], by + height, p10[2])
+        n0, n1 = (c0, 0.0, s0), (c1, 0.0, s1)
+        pos += [p10, p00, p01, p10, p01, p11]
+        nn += [n1, n0, n0, n1, n0, n1]
+    return _tris(np.array(pos), np.array(nn), color, 0.0)
+
+
+def blob(center, radius, color, squash=0.85) -> np.ndarray:
+    """A subdivided octahedron (a round crown for broadleaf trees), smooth normals."""
+    v = [np.array(p, dtype=np.float64) for p in
+         ((1, 0, 0), (-1, 0, 0), (0, 1, 0), (0, -1, 0), (0, 0, 1), (0, 0, -1))]
+    faces = [(0, 2, 4), (4, 2, 1), (1, 2, 5), (5, 2, 0), (4, 3, 0), (1, 3, 4), (5, 3, 1), (0, 3, 5)]
+    tris = [(v[a], v[b], v[c]) for a, b, c in faces]
+    for _ in range(2):
+        nxt = []
+        for a, b, c in tris:
+            ab, bc, ca = [(p + q) / np.linalg.norm(p + q) for p, q in ((a, b), (b, c), (c, a))]
+            nxt += [(a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca)]
+        tris = nxt
+    unit = np.array([p for t in tris for p in t])
+    scale = np.array([radius, radius * squash, radius])
+    pos = np.asarray(center) + unit * scale
+    nrm = unit / scale
+    nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
+    return _tris(pos, nrm, color, 0.0)
+
+
+def _terrain_grid(n: int = 288):
+    xs = np.linspace(-terrain.EXTENT, terrain.EXTENT, n)
+    X, Z = np.meshgrid(xs, xs, indexing="xy")
+    Y = terrain.height(X, Z)
+    N = terrain.normal(X, Z)
+    verts = np.zeros((n * n, VERTEX_FLOATS), np.float32)
+    verts[:, 0], verts[:, 1], verts[:, 2] = X.ravel(), Y.ravel(), Z.ravel()
+    verts[:, 3:6] = N.reshape(-1, 3)
+    verts[:, 9] = 1.0
+    # cells in square chunks, so that the renderer can draw the nearest chunks first
+    # (early depth rejection then skips most hidden terrain fragments)
+    idx, chunks = [], []
+    step = (n - 1) // CHUNKS + 1
+    for j0 in range(0, n - 1, step):
+        for i0 in range(0, n - 1, step):
+            I, J = np.meshgrid(np.arange(i0, min(i0 + step, n - 1)), np.arange(j0, min(j0 + step, n - 1)),
+                               indexing="xy")
+            a = (J * n + I).ravel()
+            b, c, d = a + 1, a + n, a + n + 1
+            tri = np.stack([a, c, b, b, c, d], 1).ravel()
+            first = sum(len(x) for x in idx)
+            centre = verts[tri, :3].mean(axis=0)
+            chunks.append((first, len(tri), *centre))
+            idx.append(tri)
+    return verts, np.concatenate(idx).astype(np.uint32), np.array(chunks, dtype=np.float64)
+
+
+def _tree_spots() -> list[tuple[float, float, str]]:
+    rng = np.random.default_rng(2002)
+    spots: list[tuple[float, float, str]] = [
+        (68.0, -38.0, "pine"), (52.0, -62.0, "pine"), (84.0, -70.0, "oak"), (-22.0, -44.0, "oak")]
+    tries = 0
+    while len(spots) < 110 and tries < 5000:
+        tries += 1
+        if rng.random() < 0.8:   # the forest, east of the river
+            x, z = rng.normal(75, 24), rng.normal(-60, 26)
+        else:                    # scattered trees
+            x, z = rng.uniform(-190, 190), rng.uniform(-190, 120)
+        if abs(x - float(terrain.river_x(z))) < 14 or abs(z - terrain.ROAD_Z) < 8:
+            continue
+        if abs(x + 40) < 12 and abs(z + 28) < 11:  # the house
+            continue
+        if any((x - sx) ** 2 + (z - sz) ** 2 < 20 for sx, sz, _ in spots):
+            continue
+        spots.append((x, z, "pine" if rng.random() < 0.7 else "oak"))
+    return spots
+
+
+HOUSE = (-40.0, -28.0)
+
+
+@lru_cache(maxsize=1)
+def landmarks() -> Landmarks:
+    trees = []
+    for x, z, kind in _tree_spots()[:4]:
+        y = float(terrain.height(x, z))
+        trees.append((x, y + (6.0 if kind == "pine" else 5.5), z))
+    hx, hz = HOUSE
+    bx = float(terrain.river_x(terrain.ROAD_Z))
+    return Landmarks(house=(hx, float(terrain.height(hx, hz)) + 3.0, hz),
+                     bridge=(bx, terrain.BRIDGE_DECK, terrain.ROAD_Z),
+                     trees=tuple(trees), forest=(75.0, float(terrain.height(75, -60)) + 5, -60.0))
+
+
+def _house() -> list[np.ndarray]:
+    hx, hz = HOUSE
+    w, dpt, wall_h = 5.0, 3.6, 4.2
+    corners = [terrain.height(hx + sx * w, hz + sz * dpt) for sx in (-1, 1) for sz in (-1, 1)]
+    y0 = float(min(corners)) - 0.4
+    floor = float(max(corners)) + 0.1
+    wall = _rgb("#d9d2c3")
+    roof = _rgb("#7a2b1e")
+    parts = [box((hx - w - 0.2, y0, hz - dpt - 0.2), (hx + w + 0.2, floor, hz + dpt + 0.2), _rgb("#6f6a62")),
+             box((hx - w, floor, hz - dpt), (hx + w, floor + wall_h, hz + dpt), wall)]
+    top, ridge = floor + wall_h, floor + wall_h + 2.8
+    ov = 0.6
+    xa, xb = hx - w - ov, hx + w + ov
+    za, zb = hz - dpt - ov, hz + dpt + ov
+    parts += [_quad((xa, top, zb), (xb, top, zb), (xb, ridge, hz), (xa, ridge, hz), roof),
+              _quad((xb, top, za), (xa, top, za), (xa, ridge, hz), (xb, ridge, hz), roof),
+              _quad((xa, top - 0.05, za), (xb, top - 0.05, za), (xb, top - 0.05, zb), (xa, top - 0.05, zb), roof * 0.6)]
+    # gables
+    for x, sgn in ((hx - w, -1), (hx + w, 1)):
+        tri = np.array([(x, top, hz - dpt), (x, top, hz + dpt), (x, ridge - 0.3, hz)])
+        if sgn < 0:
+            tri = tri[::-1]
+        parts.append(_tris(tri, np.tile((sgn, 0.0, 0.0), (3, 1)), wall, 0.0))
+    # door and windows, 4 cm proud of the wall (well above depth precision at 100 m)
+    zf = hz + dpt + 0.04
+    dark = _rgb("#2a3440")
+    parts.append(box((hx - 0.6, floor, zf - 0.05), (hx + 0.6, floor + 2.2, zf), _rgb("#5b3a22")))
+    for cx in (hx - 3.0, hx + 3.0):
+        parts.append(box((cx - 0.7, floor + 1.3, zf - 0.05), (cx + 0.7, floor + 2.6, zf), dark))
+    for cx in (hx - 2.5, hx + 2.5):
+        parts.append(box((cx - 0.7, floor + 1.3, hz - dpt - 0.04), (cx + 0.7, floor + 2.6, hz - dpt + 0.01), dark))
+    parts.append(box((hx + 2.2, top, hz - 1.2), (hx + 3.1, ridge + 0.6, hz - 0.3), _rgb("#8a5a44")))
+    return parts
+
+
+def _bridge() -> list[np.ndarray]:
+    bx = float(terrain.river_x(terrain.ROAD_Z))
+    z0 = terrain.ROAD_Z
+    half = 13.0
+    deck = terrain.BRIDGE_DECK
+    stone = _rgb("#8d877c")
+    wood = _rgb("#6b4a2f")
+    parts = [box((bx - half, deck - 0.5, z0 - 3.3), (bx + half, deck + 0.02, z0 + 3.3), stone)]
+    for side in (-1, 1):
+        zr = z0 + side * 3.15
+        parts.append(box((bx - half, deck + 0.9, zr - 0.12), (bx + half, deck + 1.05, zr + 0.12), wood))
+        for px in np.arange(bx - half + 0.5, bx + half, 2.0):
+            parts.append(box((px - 0.1, deck, zr - 0.1), (px + 0.1, deck + 0.95, zr + 0.1), wood))
+    for px in (bx - 5.0, bx + 5.0):
+        parts.append(box((px - 0.8, -3.5, z0 - 2.6), (px + 0.8, deck - 0.5, z0 + 2.6), stone * 0.9))
+    return parts
+
+
+def _trees() -> list[np.ndarray]:
+    parts = []
+    rng = np.random.default_rng(77)
+    for x, z, kind in _tree_spots():
+        y = float(terrain.height(x, z)) - 0.3
+        s = rng.uniform(0.8, 1.25)
+        trunk = _rgb("#4a3526")
+        if kind == "pine":
+            green = _rgb("#1f3d1c") * rng.uniform(0.8, 1.15)
+            parts.append(cylinder((x, y, z), 0.35 * s, 3.0 * s, trunk))
+            for k, (r, h) in enumerate(((3.2, 5.5), (2.5, 4.5), (1.7, 3.6))):
+                parts.append(cone((x, y + (2.0 + 2.3 * k) * s, z), r * s, h * s, green))
+        else:
+            green = _rgb("#3a5a22") * rng.uniform(0.8, 1.15)
+            parts.append(cylinder((x, y, z), 0.4 * s, 4.0 * s, trunk))
+            parts.append(blob((x, y + 5.5 * s, z), 3.4 * s, green))
+    return parts
+
+
+@lru_cache(maxsize=2)
+def build(name: str) -> Mesh:
+    if name == "calibration":
+        return _calibration()
+    tv, ti, tc = _terrain_grid()
+    E = terrain.EXTENT
+    water = _quad((-E, terrain.WATER_LEVEL, E), (E, terrain.WATER_LEVEL, E),
+                  (E, terrain.WATER_LEVEL, -E), (-E, terrain.WATER_LEVEL, -E), _rgb("#0e2a30"), 2.0)
+    objects = np.concatenate([water] + _house() + _bridge() + _trees())
+    return Mesh(tv, ti, tc, objects, (np.array([0.0, 5.0, 0.0]), E * 1.05))
+
+
+# The calibration scene: unlit, so a pixel's scene colour equals its albedo exactly.
+CALIBRATION_GROUND = "#808080"
+CALIBRATION_SKY = "#9fb4cc"
+CALIBRATION_BOXES = (  # (lo, hi, colour)
+    ((-6.0, 0.0, -30.0), (-2.0, 4.0, -26.0), "#d02020"),
+    ((2.0, 0.0, -50.0), (6.0, 6.0, -46.0), "#20b040"),
+    ((-14.0, 0.0, -80.0), (-8.0, 10.0, -74.0), "#2040d0"),
+    ((10.0, 0.0, -120.0), (18.0, 12.0, -112.0), "#f0f0f0"),
+)
+
+
+def _calibration() -> Mesh:
+    E = 2000.0
+    ground = _quad((-E, 0.0, E), (E, 0.0, E), (E, 0.0, -E), (-E, 0.0, -E), _rgb(CALIBRATION_GROUND), 3.0)
+    boxes = [box(lo, hi, _rgb(c), 3.0) for lo, hi, c in CALIBRATION_BOXES]
+    empty_v = np.zeros((0, VERTEX_FLOATS), np.float32)
+    return Mesh(empty_v, np.zeros(0, np.uint32), np.zeros((0, 5)), np.concatenate([ground] + boxes),
+                (np.array([0.0, 0.0, -60.0]), 150.0))

@@ -1,0 +1,420 @@
+"""REST routes: stills, transmittance, schema, presets, health; the static page."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import logging
+from collections import OrderedDict
+from contextlib import asynccontextmanager
+from pathlib import Path
+from typing import Any, Literal
+
+import fastapi_offline
+import numpy as np
+from fastapi import FastAPI, HTTPException, Request, WebSocket
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import FileResponse, JSONResponse, Response
+from fastapi.staticfiles import StaticFiles
+from starlette.exceptions import HTTPException as StarletteHTTPException
+from pydantic import BaseModel, Field, ValidationError, model_validator
+
+from fogbank import STATIC_DIR, __version__
+
+from fogbank.workers import cost
+
+from fogbank.service import metrics
+
+from fogbank.service import openapi
+
+from fogbank.workers import worker
+from fogbank.model import presets as P
+from fogbank.render.encode import MEDIA_TYPES
+from fogbank.service.limits import RequestLimits
+from fogbank.model.params import RAY_LIMIT, Direction, FogParams, Position, StillParams, Strict
+from fogbank.service.security import SecurityHeaders, origin_allowed
+from fogbank.workers.supervisor import Supervisor, WorkerError
+from fogbank.settings import Settings, get_settings
+from fogbank.stream.streaming import Streamer, websocket_endpoint
+from fogbank.model.urlstate import URLError, decode
+from fogbank.model.urlstate import encode as encode_url
+
+log = logging.getLogger("fogbank.service.api")
+SWAGGER_DIR = Path(fastapi_offline.__file__).parent / "static"   # Swagger UI, shipped by a package
+MAX_RAYS = 16384
+MAX_RAY_TIMES = 16   # distinct ray times per request (each simulates the particles once)
+
+
+class Ray(Strict):
+    origin: Position = Field(description="m, each axis within the scene's position limit")
+    direction: Direction = Field(description="normalised by the server; not all zero",
+                            json_schema_extra={"contains": {"not": {"const": 0}}})
+    length: float = Field(ge=0, le=RAY_LIMIT, strict=True, description="m")
+    time: float = Field(0.0, ge=0, le=1e6, strict=True, description="s")
+
+
+class TransmittanceRequest(Strict):
+    params: dict[str, Any] = Field(default_factory=dict,
+                                   description="a patch over the default preset (FogParams fields)")
+    rays: list[Ray] = Field(min_length=1, max_length=MAX_RAYS,
+                            description=f"at most {MAX_RAYS} rays with at most {MAX_RAY_TIMES} "
+                                        "distinct times (the particle state is computed once per time)")
+
+    @model_validator(mode="after")
+    def _times(self) -> "TransmittanceRequest":
+        n = len({r.time for r in self.rays})
+        if n > MAX_RAY_TIMES:
+            raise ValueError(f"{n} distinct ray times; at most {MAX_RAY_TIMES} are allowed per request")
+        return self
+
+
+class TransmittanceResponse(BaseModel):
+    transmittance: list[float]
+    renderer: str
+
+
+def _safe(v):
+    """Text that can be sent as UTF-8: user strings may hold lone surrogates ('\\ud800'
+    from a JSON escape), which made the 422 itself fail with a 500."""
+    if isinstance(v, str):
+        return v.encode("utf-8", "backslashreplace").decode("utf-8")
+    return v
+
+
+def _clean(e: dict) -> dict:
+    """A JSON-safe error: loc, msg, type, and the offending input when it is small."""
+    out = {"loc": [_safe(x) for x in e.get("loc", ())], "msg": _safe(str(e.get("msg", ""))),
+           "type": e.get("type", "")}
+    v = e.get("input")
+    if isinstance(v, bool) or (isinstance(v, int) and abs(v) < 10 ** 200):
+        out["input"] = v
+    elif isinstance(v, str) and len(v) <= 200:
+        out["input"] = _safe(v)
+    elif isinstance(v, float):
+        out["input"] = v if math.isfinite(v) else str(v)
+    return out
+
+
+def _validation_error(exc: ValidationError, prefix: tuple) -> RequestValidationError:
+    return RequestValidationError([dict(e, loc=(*prefix, *e["loc"]))
+                                   for e in exc.errors(include_url=False)])
+
+
+def resolve(patch: dict, cls=StillParams, prefix: tuple = ("body",)):
+    """A request's params: `patch` merged over the default preset, validated."""
+    if not isinstance(patch, dict):
+        raise RequestValidationError([{"loc": list(prefix), "msg": "expected a JSON object",
+                                       "type": "dict_type"}])
+    base = P.preset_dict("default")
+    if cls is StillParams:
+        base.update(width=StillParams.model_fields["width"].default,
+                    height=StillParams.model_fields["height"].default)
+    try:
+        return cls.model_validate(P.merge(base, patch))
+    except ValidationError as exc:
+        raise _validation_error(exc, prefix) from None
+
+
+
+class StillCache:
+    """Encoded stills by ETag, least recently used first out, bounded in bytes."""
+
+    def __init__(self, budget: int):
+        self.budget = budget
+        self.items: OrderedDict[str, bytes] = OrderedDict()
+        self.size = 0
+
+    def get(self, key: str) -> bytes | None:
+        if key in self.items:
+            self.items.move_to_end(key)
+            return self.items[key]
+        return None
+
+    def put(self, key: str, data: bytes) -> None:
+        if len(data) > self.budget or key in self.items:
+            return
+        self.items[key] = data
+        self.size += len(data)
+        while self.size > self.budget:
+            self.size -= len(self.items.popitem(last=False)[1])
+
+
+def _over_budget(c: cost.Cost, settings: Settings, what: str) -> RequestValidationError | None:
+    """A 422 naming what to reduce, when `c` is beyond the still budgets."""
+    if c.memory > settings.still_memory_mb << 20:
+        return RequestValidationError([{
+            "loc": ["body", "width"], "type": "cost",
+            "msg": f"{what} needs about {c.memory / 2**20:.0f} MiB of render targets; this server allows "
+                   f"{settings.still_memory_mb} MiB: reduce width*height"}])
+    if c.seconds > settings.still_budget_s:
+        return RequestValidationError([{
+            "loc": ["body"], "type": "cost",
+            "msg": f"{what} is estimated at {c.seconds:.1f} s of rendering; this server allows "
+                   f"{settings.still_budget_s:g} s. Reduce what costs most: " + "; ".join(
+                       f"{k} ~{c.parts[k]:.1f} s" for k in c.biggest())
+                   + " (fewer or cheaper layers, fewer volume samples, a larger effects.fog_scale, "
+                     "or fewer pixels)"}])
+    return None
+
+
+def create_app(settings: Settings | None = None) -> FastAPI:
+    settings = settings or get_settings()
+    state: dict[str, Any] = {}
+
+    @asynccontextmanager
+    async def lifespan(app: FastAPI):
+        sup = Supervisor(settings)
+        state["workers"] = sup
+        app.state.workers = sup   # reachable for tests and fault injection
+        info = await sup.start()
+        log.info("renderer: %s", info)
+        state["cache"] = StillCache(settings.stills_cache_mb << 20)
+        state["stills"] = 0
+        state["streamer"] = Streamer(sup, frames_per_worker=settings.frames_per_worker, settings=settings)
+        state["streamer"].start()
+        state["ready"] = True
+        yield
+        state["ready"] = False
+        sup.draining = True
+        await state["streamer"].stop()
+        await sup.stop()
+
+    app = FastAPI(title="fogbank", version=__version__, lifespan=lifespan, docs_url=None, redoc_url=None,
+                  description="Analytic fog over a 3D scene, rendered on the server. "
+                              "Every look is a URL: the same query works on the page and on "
+                              "/api/still.png.")
+    app.state.drain = lambda: state.update(draining=True)
+
+    def custom_openapi():
+        if app.openapi_schema is None:
+            app.openapi_schema = openapi.build(app)
+        return app.openapi_schema
+    app.openapi = custom_openapi
+
+    @app.exception_handler(RequestValidationError)
+    async def _422(request: Request, exc: RequestValidationError):
+        return JSONResponse({"detail": [_clean(e) for e in exc.errors()]}, status_code=422)
+
+    @app.exception_handler(StarletteHTTPException)
+    async def _http(request: Request, exc: StarletteHTTPException):
+        if exc.status_code == 400 and "parsing the body" in str(exc.detail):
+            # a body that is not JSON (or not UTF-8): bad input like any other, 422
+            return JSONResponse({"detail": [{"loc": ["body"], "msg": "the body is not valid JSON",
+                                             "type": "json_invalid"}]}, status_code=422)
+        return JSONResponse({"detail": exc.detail}, status_code=exc.status_code,
+                            headers=getattr(exc, "headers", None))
+
+    async def _job(slot, fn, *args, deadline: float):
+        """A worker job for a request; worker trouble becomes 503 + Retry-After (or the
+        job's own error, 500, for a fault in the renderer's code)."""
+        try:
+            return await state["workers"].call(slot, fn, *args, deadline=deadline)
+        except WorkerError as exc:
+            metrics.ERRORS.labels("busy" if exc.status == 503 else "render").inc()
+            raise HTTPException(exc.status, str(exc), headers={"Retry-After": str(exc.retry_after)}) from None
+        except Exception as exc:  # noqa: BLE001 - a renderer fault fails this request only
+            metrics.ERRORS.labels("render").inc()
+            log.error("render failed", extra={"error": f"{type(exc).__name__}: {exc}"})
+            raise HTTPException(500, f"render failed ({type(exc).__name__}): {exc}") from None
+
+    def _slot_for(seconds: float):
+        sup: Supervisor = state["workers"]
+        if sup.batch is None or seconds <= settings.interactive_cost_s:
+            return sup.interactive.least_loaded()
+        return sup.batch.least_loaded()
+
+    def _route(still: StillParams, fmt: str):
+        """The worker for a still and its cost there: the interactive one when it is cheap
+        there (its fog program already compiled counts), else a batch one."""
+        sup: Supervisor = state["workers"]
+        key = cost.program_key(still)
+        fast = sup.interactive.least_loaded()
+        c = cost.estimate(still, fmt=fmt, scale=settings.cost_scale, compiled=key in fast.compiled)
+        if sup.batch is None or c.seconds <= settings.interactive_cost_s:
+            return fast, c
+        slot = sup.batch.least_loaded()
+        return slot, cost.estimate(still, fmt=fmt, scale=settings.cost_scale, compiled=key in slot.compiled)
+
+    async def _still(still: StillParams, fmt: str, request: Request, loc: str) -> Response:
+        info = state["workers"].info
+        query = encode_url(still)
+        key = f"{__version__}|{info.get('renderer')}|{fmt}|{query}"
+        etag = '"' + hashlib.sha256(key.encode()).hexdigest()[:32] + '"'
+        headers = {"ETag": etag, "Cache-Control": "public, max-age=3600", "X-Fogbank-Query": query}
+        if request.headers.get("if-none-match") == etag:
+            return Response(status_code=304, headers=headers)
+        cached = state["cache"].get(etag)
+        if cached is not None:
+            return Response(cached, media_type=MEDIA_TYPES[fmt], headers=headers)
+        slot, c = _route(still, fmt)
+        refusal = _over_budget(c, settings, "this still")
+        if refusal is not None:
+            metrics.ERRORS.labels("cost").inc()
+            raise RequestValidationError([dict(e, loc=[loc, *e["loc"][1:]]) for e in refusal.errors()])
+        if state["stills"] >= settings.max_stills:
+            metrics.ERRORS.labels("busy").inc()
+            raise HTTPException(503, f"{settings.max_stills} stills are rendering; retry shortly",
+                                headers={"Retry-After": "2"})
+        state["stills"] += 1
+        try:
+            out = await _job(slot, worker.still, still, fmt, deadline=settings.render_timeout_s)
+            slot.drew(cost.program_key(still))
+        finally:
+            state["stills"] -= 1
+        metrics.STILLS.labels(fmt).inc()
+        metrics.RENDER_MS.observe(out["render_ms"])
+        headers["Server-Timing"] = f'render;dur={out["render_ms"]:.1f}, encode;dur={out["encode_ms"]:.1f}'
+        state["cache"].put(etag, out["data"])
+        return Response(out["data"], media_type=MEDIA_TYPES[fmt], headers=headers)
+
+    @app.get("/api/still.{fmt}", summary="Render a still from URL params",
+             responses={200: {"content": {m: {} for m in MEDIA_TYPES.values()}},
+                        304: {"description": "not modified (If-None-Match)"},
+                        422: {"description": "a param is invalid, or the look costs more than this "
+                                             "server renders; the body names what to change"},
+                        503: {"description": "busy or slow renderer; see Retry-After"}})
+    async def still_get(fmt: Literal["png", "jpg", "webp"], request: Request):
+        """Every param of the page URL (see /api/schema), plus `width` and `height`;
+        anything left out comes from the default preset (or `preset=NAME`)."""
+        try:
+            value, _ = decode(request.url.query, StillParams)
+        except URLError as exc:
+            raise RequestValidationError(exc.errors) from None
+        try:
+            still = StillParams.model_validate(value)
+        except ValidationError as exc:
+            raise _validation_error(exc, ("query",)) from None
+        return await _still(still, fmt, request, "query")
+
+    @app.post("/api/still", summary="Render a still from JSON params",
+              responses={200: {"content": {m: {} for m in MEDIA_TYPES.values()}},
+                         422: {"description": "a param is invalid, or the look costs more than this "
+                                              "server renders; the body names what to change"},
+                         503: {"description": "busy or slow renderer; see Retry-After"}},
+              openapi_extra={"requestBody": {"required": False, "content": {"application/json": {
+                  "schema": {"type": "object"}}}}})   # the StillParams schema: see openapi.py
+    async def still_post(request: Request, format: Literal["png", "jpg", "webp"] = "png"):
+        raw = await request.body()
+        try:
+            body = json.loads(raw) if raw.strip() else {}
+        except (ValueError, RecursionError) as exc:
+            raise RequestValidationError([{"loc": ["body"], "msg": f"malformed JSON: {exc}",
+                                           "type": "json_invalid"}]) from None
+        return await _still(resolve(body), format, request, "body")
+
+    @app.post("/api/transmittance", response_model=TransmittanceResponse,
+              responses={422: {"description": "bad rays or params, or more particle simulation than "
+                                              "this server does per request"},
+                         503: {"description": "busy or slow renderer; see Retry-After"}},
+              summary="Transmittance of rays through the fog, by the frame's own GLSL")
+    async def transmittance(req: TransmittanceRequest):
+        fog = resolve(req.params, FogParams, ("body", "params"))
+        O = np.array([r.origin for r in req.rays], dtype=np.float64)
+        W = np.array([r.direction for r in req.rays], dtype=np.float64)
+        big = np.abs(W).max(axis=1)
+        bad = np.nonzero(~(big > 0))[0]
+        if len(bad):
+            raise RequestValidationError([{"loc": ["body", "rays", int(bad[0]), "direction"],
+                                           "msg": "direction must be a non-zero vector",
+                                           "type": "value_error"}])
+        W = W / big[:, None]                  # scaled first: tiny vectors do not underflow
+        W = W / np.linalg.norm(W, axis=1)[:, None]
+        D = np.array([r.length for r in req.rays])
+        Tm = np.array([r.time for r in req.rays])
+        groups = len(np.unique(np.column_stack([Tm, O]), axis=0))
+        c = cost.transmittance_seconds(fog, len(D), len(np.unique(Tm)), settings.cost_scale, groups)
+        if c.seconds > settings.still_budget_s:
+            metrics.ERRORS.labels("cost").inc()
+            raise RequestValidationError([{
+                "loc": ["body", "rays"], "type": "cost",
+                "msg": f"this request is estimated at {c.seconds:.1f} s (each distinct ray time "
+                       "simulates every particle layer, each distinct origin and time is one draw); "
+                       f"this server allows {settings.still_budget_s:g} s: use fewer distinct times, "
+                       "origins or particles"}])
+        out = await _job(_slot_for(c.seconds), worker.transmittance, fog, O, W, D, Tm,
+                         deadline=settings.render_timeout_s)
+        return {"transmittance": [float(x) for x in out["T"]],
+                "renderer": state["workers"].info.get("renderer", "")}
+
+    @app.get("/api/schema", summary="JSON Schema of the params (ranges, slider steps, units)")
+    async def schema():
+        return StillParams.model_json_schema()
+
+    @app.get("/api/presets", summary="The named looks")
+    async def presets_list():
+        out = []
+        for name, p in P.presets().items():
+            fog = FogParams.model_validate(P.preset_dict(name))
+            out.append({"name": name, "title": p["title"], "description": p["description"],
+                        "query": encode_url(fog), "params": P.preset_dict(name)})
+        return out
+
+    @app.get("/healthz",
+                   summary="Liveness: 200 while some render worker has rendered within liveness_s",
+                   responses={503: {"description": "no worker has rendered recently: restart me"}})
+    async def healthz():
+        sup: Supervisor | None = state.get("workers")
+        if sup is None:
+            return JSONResponse({"status": "starting"}, status_code=503)
+        live, age = sup.live()
+        info = sup.info
+        body = {"status": "ok" if live else "failing", "renderer": info.get("renderer"),
+                "gl_version": info.get("version"), "last_render_s": round(age, 3),
+                "queue": sup.queue_depth(), "workers": sup.status()}
+        return JSONResponse(body, status_code=200 if live else 503)
+
+    @app.get("/readyz",
+                   summary="Readiness: 200 when this replica takes new work",
+                   responses={503: {"description": "starting, draining, busy or failing"}})
+    async def readyz():
+        sup: Supervisor | None = state.get("workers")
+        streamer = state.get("streamer")
+        if sup is None or not state.get("ready"):
+            return JSONResponse({"status": "starting"}, status_code=503)
+        if sup.draining or state.get("draining"):
+            return JSONResponse({"status": "draining"}, status_code=503)
+        if not sup.live()[0]:
+            return JSONResponse({"status": "failing"}, status_code=503)
+        if len(streamer.clients) >= settings.max_sessions:
+            return JSONResponse({"status": "busy", "reason": "sessions full"}, status_code=503)
+        if state["stills"] >= settings.max_stills:
+            return JSONResponse({"status": "busy", "reason": "stills full"}, status_code=503)
+        return {"status": "ready", "sessions": len(streamer.clients), "stills": state["stills"]}
+
+    for path, fn in (("/healthz", healthz), ("/readyz", readyz)):
+        app.add_api_route(path, fn, methods=["HEAD"], include_in_schema=False)
+
+    @app.websocket("/ws")
+    async def ws(websocket: WebSocket):
+        if not origin_allowed(websocket.headers.get("origin"), websocket.headers.get("host"),
+                              settings.allowed_origins, websocket.url.scheme):
+            metrics.ERRORS.labels("origin").inc()
+            await websocket.close(code=1008, reason="origin not allowed")
+            return
+        await websocket_endpoint(websocket, state["streamer"], state["workers"].info)
+
+    @app.get("/metrics", include_in_schema=False)
+    async def metrics_endpoint():
+        sup: Supervisor | None = state.get("workers")
+        metrics.QUEUE.set(sup.queue_depth() if sup else 0)
+        metrics.SESSIONS.set(len(state["streamer"].clients) if "streamer" in state else 0)
+        if sup:
+            metrics.TREE_RSS.set(sup.tree_rss())
+        return Response(metrics.render(), media_type=metrics.CONTENT_TYPE)
+
+    @app.api_route("/", methods=["GET", "HEAD"], include_in_schema=False)
+    async def index():
+        return FileResponse(STATIC_DIR / "index.html")
+
+    @app.api_route("/docs", methods=["GET", "HEAD"], include_in_schema=False)
+    async def docs():
+        """Swagger UI from assets served here (no CDN; the page's CSP holds)."""
+        return FileResponse(STATIC_DIR / "docs.html")
+
+    app.mount("/static", StaticFiles(directory=STATIC_DIR), name="static")
+    app.mount("/docs-assets", StaticFiles(directory=SWAGGER_DIR), name="docs-assets")
+    app.add_middleware(SecurityHeaders)
+    app.add_middleware(RequestLimits, max_body=settings.max_body_bytes, max_url=settings.max_url_bytes,
+                       max_headers=settings.max_headers, max_header_bytes=settings.max_header_bytes)
+    return app

@@ -1,0 +1,223 @@
+"""One streaming client's state, with no GL and no socket in it: the look, the clock, the
+preferred view, frames in flight, and when the next frame is due.
+
+Latest-wins: a session holds only its current state; a frame is a snapshot of it taken
+when the scheduler starts that frame, so changes that arrive meanwhile are never queued
+behind it. At most MAX_IN_FLIGHT frames are unacknowledged or being made.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from pydantic import ValidationError
+
+from fogbank.model import presets as P
+from fogbank.model.params import FogParams, StillParams
+from fogbank.stream.protocol import (AckMsg, CameraMsg, InteractMsg, ParamsMsg, PlayMsg, QueryMsg, SeekMsg,
+                       SpeedMsg, ViewMsg)
+from fogbank.model.urlstate import URLError, decode, encode, view_state, view_suffix
+
+MAX_IN_FLIGHT = 2
+INPUT_SETTLE_S = 0.25     # after the last input, this long until the full-quality refinement
+VIEW_WAIT_S = 0.3         # a new session waits this long for its client's view size
+PREVIEW_QUALITY = 60      # JPEG quality while the user drags
+
+
+@dataclass
+class FrameJob:
+    """What one frame is made from (a snapshot of the session)."""
+    frame: int
+    version: int
+    still: StillParams
+    msaa: bool
+    quality: int
+    full: bool
+    playing: bool
+
+
+def _errors(exc: ValidationError, prefix: list) -> list[dict[str, Any]]:
+    out = []
+    for e in exc.errors(include_url=False):
+        item = {"loc": [*prefix, *e["loc"]], "msg": e["msg"], "type": e["type"]}
+        out.append(item)
+    return out
+
+
+class Session:
+    def __init__(self, sid: str, now: float, query: str = ""):
+        self.id = sid
+        self.view = ViewMsg(type="view")
+        self.view_known = False   # frames wait for the client's size (briefly)
+        self.created = now
+        self.version = 0
+        self.frame = 0            # id of the last frame started
+        self.acked = 0            # highest frame id acknowledged
+        self.making = 0           # frames started but not yet sent
+        self.sent = 0             # id of the last frame sent
+        self.last_start = -math.inf
+        self.last_input = -math.inf
+        self.interacting = False
+        self.dirty = True         # the look changed since the last frame
+        self.last_full = True     # the last frame was a full-quality one
+        self.playing = True
+        self.speed = 1.0
+        self.stalled = -1         # the version whose frame passed its deadline
+        self.fog = FogParams.model_validate(P.preset_dict("default"))
+        self._base_sim = self.fog.time
+        self._base_wall = now
+        if query:
+            self.apply(QueryMsg(type="query", query=query), now)
+
+    # ------------------------------------------------------------ clock
+
+    def sim_time(self, now: float) -> float:
+        if not self.playing:
+            return self._base_sim
+        return max(0.0, self._base_sim + (now - self._base_wall) * self.speed)
+
+    def _rebase(self, now: float, sim: float) -> None:
+        self._base_sim, self._base_wall = max(0.0, sim), now
+
+    # ------------------------------------------------------------ messages
+
+    def state(self, now: float) -> dict[str, Any]:
+        return {"type": "state", "version": self.version,
+                "query": encode(self.fog) + view_suffix(self.playing, self.speed),
+                "params": self.fog.model_dump(mode="json"), "playing": self.playing,
+                "speed": self.speed, "time": self.sim_time(now), "view": self.view.model_dump()}
+
+    def _set_fog(self, fog: FogParams, now: float, *, input_: bool = True) -> None:
+        if fog.time != self.fog.time:   # a new time in the look is a seek
+            self._rebase(now, fog.time)
+        self.fog = fog
+        self.version += 1
+        self.dirty = True
+        if input_:
+            self.last_input = now
+
+    def apply(self, msg, now: float) -> list[dict[str, Any]]:
+        """Apply one message; returns the messages to send back (state or error). A bad
+        message changes nothing."""
+        try:
+            if isinstance(msg, QueryMsg):
+                try:
+                    value, _ = decode(msg.query.lstrip("?"), FogParams)
+                except URLError as exc:
+                    return [{"type": "error", "detail": exc.errors, "msg": str(exc)}]
+                self._set_fog(FogParams.model_validate(value), now, input_=False)
+                view = view_state(msg.query.lstrip("?"))
+                self.playing = view.get("playing", True)
+                self.speed = view.get("speed", 1.0)
+                self._rebase(now, self.fog.time)
+                return [self.state(now)]
+            if isinstance(msg, (ParamsMsg, CameraMsg)):
+                patch = msg.params if isinstance(msg, ParamsMsg) else {"camera": msg.camera}
+                base = P.preset_dict("default") if getattr(msg, "replace", False) else \
+                    self.fog.model_dump(mode="json")
+                fog = FogParams.model_validate(P.merge(base, patch))
+                self._set_fog(fog, now)
+                return [self.state(now)]
+        except ValidationError as exc:
+            prefix = ["params"] if isinstance(msg, ParamsMsg) else []
+            errs = _errors(exc, prefix)
+            return [{"type": "error", "detail": errs,
+                     "msg": f"{'.'.join(map(str, errs[0]['loc']))}: {errs[0]['msg']}"}]
+        if isinstance(msg, PlayMsg):
+            if msg.playing != self.playing:
+                t = self.sim_time(now)
+                self.playing = msg.playing
+                self._rebase(now, t)
+                if not msg.playing:   # the URL keeps the paused time
+                    self.fog = self.fog.model_copy(update={"time": round(t, 3)})
+                    self._base_sim = self.fog.time
+                    self.version += 1
+                self.dirty = True
+            return [self.state(now)]
+        if isinstance(msg, SpeedMsg):
+            self._rebase(now, self.sim_time(now))
+            self.speed = msg.speed
+            return [self.state(now)]
+        if isinstance(msg, SeekMsg):
+            self._rebase(now, msg.time)
+            self.fog = self.fog.model_copy(update={"time": msg.time})
+            self.version += 1
+            self.dirty = True
+            self.last_input = now
+            return [self.state(now)]
+        if isinstance(msg, ViewMsg):
+            self.view = msg
+            self.view_known = True
+            self.dirty = True
+            return []
+        if isinstance(msg, InteractMsg):
+            self.interacting = msg.active
+            self.last_input = now
+            return []
+        if isinstance(msg, AckMsg):
+            if msg.frame <= self.sent:
+                self.acked = max(self.acked, msg.frame)
+            return []
+        return [{"type": "error", "msg": f"unhandled message {type(msg).__name__}"}]
+
+    # ------------------------------------------------------------ scheduling
+
+    def in_flight(self) -> int:
+        return (self.sent - self.acked) + self.making
+
+    def previewing(self, now: float) -> bool:
+        return self.interacting or now - self.last_input < INPUT_SETTLE_S
+
+    def wants_frame(self, now: float) -> bool:
+        """Something new to show: time runs, the look changed, or a refinement is owed
+        (never while the look whose frame was stopped at its deadline is unchanged)."""
+        if self.stalled == self.version:
+            return False
+        return self.playing or self.dirty or (not self.last_full and not self.previewing(now))
+
+    def next_due(self, now: float) -> float | None:
+        """When the next frame may start (None: nothing to send until something changes)."""
+        if self.in_flight() >= MAX_IN_FLIGHT:
+            return None   # an ack or a finished frame wakes the scheduler
+        if not self.view_known and now < self.created + VIEW_WAIT_S:
+            return self.created + VIEW_WAIT_S   # no frame at a size the client did not ask for
+        if not self.wants_frame(now):
+            if not self.last_full and self.previewing(now):
+                return self.last_input + INPUT_SETTLE_S   # the refinement, once input settles
+            return None
+        return max(now, self.last_start + 1.0 / self.view.fps)
+
+    def start_frame(self, now: float) -> FrameJob:
+        preview = self.previewing(now)
+        v = self.view
+        fog = self.fog
+        scale = fog.effects.fog_scale
+        if preview:   # cheaper while dragging: coarser fog, no MSAA, lower JPEG quality
+            scale = max(scale, 2 if v.width * v.height <= 640 * 360 else 4)
+        eff = fog.effects.model_copy(update={"fog_scale": scale})
+        still = StillParams.model_construct(**{**dict(fog), "effects": eff, "time": self.sim_time(now),
+                                               "width": v.width, "height": v.height})
+        self.frame += 1
+        self.making += 1
+        self.last_start = now
+        self.dirty = False
+        self.last_full = not preview
+        return FrameJob(self.frame, self.version, still, msaa=not preview,
+                        quality=min(v.quality, PREVIEW_QUALITY) if preview else v.quality,
+                        full=not preview, playing=self.playing)
+
+    def pause(self, now: float) -> None:
+        """Stop the clock and make no frame until the look changes (its frame was too
+        costly: trying again would only fail again)."""
+        if self.playing:
+            self.apply(PlayMsg(type="play", playing=False), now)
+        self.stalled = self.version
+        self.dirty = False
+
+    def frame_done(self, job: FrameJob, sent: bool) -> None:
+        """A frame was sent (or dropped: failed, stale, or the client left)."""
+        self.making -= 1
+        if sent:
+            self.sent = max(self.sent, job.frame)

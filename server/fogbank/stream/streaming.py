@@ -1,0 +1,333 @@
+"""Live frames over a WebSocket: the scheduler that shares the interactive render
+workers among sessions, and the /ws endpoint.
+
+Each session is pinned to one interactive worker (the one with the fewest sessions), so
+its cached scene pass stays where its frames are drawn. The scheduler starts a frame for
+the next due session in round-robin order, with at most `frames_per_worker` frames on
+each worker (one: a second queued frame would only add a frame of latency). Each frame
+is a snapshot of its session (latest wins); the worker renders and JPEG-encodes it, and
+the bytes go out as header + JPEG. A session never has more than MAX_IN_FLIGHT frames
+unacknowledged, so a slow client gets fewer frames, never older ones.
+
+A frame past its deadline kills its worker (the supervisor's rule); the session that
+asked for it is paused and told why, so one too-costly look cannot keep killing the
+worker that every other session shares. Sessions that go quiet (no message for
+`idle_timeout_s`) or stop acknowledging (`ack_timeout_s`) are closed with code 4408 and
+a reason the page shows.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import logging
+import time
+import uuid
+from collections import OrderedDict
+from typing import Any
+
+from starlette.websockets import WebSocket, WebSocketDisconnect, WebSocketState
+
+from fogbank.workers import cost
+
+from fogbank.service import metrics
+
+from fogbank.workers import worker
+from fogbank.stream.protocol import (FLAG_FULL, FLAG_PLAYING, MAX_MESSAGE, PROTOCOL, ProtocolError, QueryMsg,
+                       frame_header, parse)
+from fogbank.stream.session import FrameJob, Session
+from fogbank.workers.supervisor import DeadlineExceeded, Slot, Supervisor, WorkerError
+
+log = logging.getLogger("fogbank.stream")
+
+
+IDLE_CLOSE = 4408   # closed for inactivity (no messages, or frames left unacknowledged)
+
+
+class Client:
+    def __init__(self, session: Session, ws: WebSocket, addr: str, now: float):
+        self.session = session
+        self.ws = ws
+        self.addr = addr
+        self.slot: Slot | None = None
+        self.send_lock = asyncio.Lock()
+        self.closed = False
+        self.last_message = now
+        self.unacked_since: float | None = None   # oldest frame sent and not yet acknowledged
+
+    async def send_json(self, msg: dict[str, Any]) -> None:
+        # ASCII JSON: user text echoed in an error (a field name, a value) may hold lone
+        # surrogates, which cannot be encoded as UTF-8 and took the socket down
+        text = json.dumps(msg)
+        async with self.send_lock:
+            await self.ws.send_text(text)
+
+    async def send_bytes(self, data: bytes) -> None:
+        async with self.send_lock:
+            await self.ws.send_bytes(data)
+
+
+class Streamer:
+    def __init__(self, workers: Supervisor, frames_per_worker: int = 1, clock=time.monotonic, settings=None):
+        from fogbank.settings import Settings
+        self.settings = settings or Settings()
+        self.workers = workers
+        self.frames_per_worker = frames_per_worker
+        self.clock = clock
+        self.clients: OrderedDict[str, Client] = OrderedDict()
+        self.frames: dict[int, int] = {}   # frames being made, by interactive worker index
+        self._wake = asyncio.Event()
+        self._tasks: list[asyncio.Task] = []
+        self._rr = 0
+
+    def start(self) -> None:
+        loop = asyncio.get_running_loop()
+        self._tasks = [loop.create_task(self._run(), name="fogbank-scheduler"),
+                       loop.create_task(self._watch(), name="fogbank-idle-watch")]
+
+    async def stop(self) -> None:
+        for task in self._tasks:
+            task.cancel()
+            try:
+                await task
+            except asyncio.CancelledError:
+                pass
+
+    def wake(self) -> None:
+        self._wake.set()
+
+    def per_client(self, addr: str) -> int:
+        return sum(1 for c in self.clients.values() if c.addr == addr)
+
+    def add(self, client: Client) -> None:
+        slot = self.workers.interactive.least_loaded("sessions")
+        slot.sessions += 1
+        client.slot = slot
+        self.clients[client.session.id] = client
+        self.wake()
+
+    def remove(self, client: Client) -> None:
+        client.closed = True
+        if self.clients.pop(client.session.id, None) is not None and client.slot is not None:
+            client.slot.sessions -= 1
+            asyncio.get_running_loop().create_task(self._drop(client.slot, client.session.id))
+
+    async def _drop(self, slot: Slot, sid: str) -> None:
+        """Free the session's cached scene pass on its worker."""
+        try:
+            await self.workers.call(slot, worker.drop_slot, sid, deadline=self.settings.frame_deadline_s)
+        except Exception:  # noqa: BLE001 - a dead worker has nothing left to free
+            pass
+
+    def _pick(self, now: float) -> tuple[Client | None, float | None]:
+        """The next due client (whose worker has room) in round-robin order, else when
+        the earliest one is due."""
+        clients = list(self.clients.values())
+        soonest = None
+        for i in range(len(clients)):
+            c = clients[(self._rr + i) % len(clients)]
+            if self.frames.get(c.slot.index, 0) >= self.frames_per_worker:
+                continue   # a finished frame wakes the scheduler
+            due = c.session.next_due(now)
+            if due is None:
+                continue
+            if due <= now:
+                self._rr = (self._rr + i + 1) % max(1, len(clients))
+                return c, None
+            soonest = due if soonest is None else min(soonest, due)
+        return None, soonest
+
+    async def _run(self) -> None:
+        while True:
+            self._wake.clear()
+            now = self.clock()
+            client, soonest = self._pick(now)
+            if client is not None:
+                job = client.session.start_frame(now)
+                self.frames[client.slot.index] = self.frames.get(client.slot.index, 0) + 1
+                asyncio.get_running_loop().create_task(self._produce(client, job))
+                continue
+            timeout = None if soonest is None else max(0.0, soonest - now)
+            try:
+                await asyncio.wait_for(self._wake.wait(), timeout)
+            except asyncio.TimeoutError:
+                pass
+
+    async def _produce(self, client: Client, job: FrameJob) -> None:
+        s = client.session
+        sent = False
+        slot = client.slot
+        try:
+            try:
+                out = await self.workers.call(slot, worker.frame, job.still, s.id, job.msaa, job.quality,
+                                              deadline=self.settings.frame_deadline_s)
+                slot.drew(cost.program_key(job.still))
+            finally:
+                self.frames[slot.index] -= 1
+                self.wake()
+            render_ms, encode_ms = out["render_ms"], out["encode_ms"]
+            metrics.RENDER_MS.observe(render_ms)
+            metrics.ENCODE_MS.observe(encode_ms)
+            flags = (FLAG_FULL if job.full else 0) | (FLAG_PLAYING if job.playing else 0)
+            header = frame_header(job.frame, job.version, job.still.time, render_ms, encode_ms,
+                                  job.still.width, job.still.height, job.quality, flags,
+                                  job.still.effects.fog_scale)
+            # a newer frame already went out (frames finish out of order when sizes or
+            # encodes differ): this one is stale, drop it rather than show the past
+            if not client.closed and job.frame > s.sent:
+                s.sent = job.frame
+                await client.send_bytes(header + out["data"])
+                if client.unacked_since is None:
+                    client.unacked_since = self.clock()
+                sent = True
+                metrics.FRAMES.inc()
+        except DeadlineExceeded as exc:
+            metrics.ERRORS.labels("frame_deadline").inc()
+            log.warning("frame past its deadline; session paused", extra={"session": s.id, "frame": job.frame})
+            s.pause(self.clock())
+            await self._tell(client, s.state(self.clock()))
+            await self._tell(client, {"type": "error", "loc": ["params"], "retry_after": exc.retry_after,
+                                      "msg": f"this look took over {self.settings.frame_deadline_s:g} s a frame, "
+                                             "so the stream is paused: make it cheaper (fewer or cheaper layers, "
+                                             "fewer volume samples, a larger effects.fog_scale or a smaller view)"})
+        except Exception as exc:  # noqa: BLE001 - one frame fails, the session goes on
+            metrics.ERRORS.labels("frame").inc()
+            log.warning("frame failed", extra={"session": s.id, "frame": job.frame, "error": str(exc)})
+            msg = str(exc) if isinstance(exc, WorkerError) else f"{type(exc).__name__}: {exc}"
+            await self._tell(client, {"type": "error", "msg": f"frame {job.frame} failed: {msg}"})
+        finally:
+            s.frame_done(job, sent)
+            self.wake()
+
+    async def _tell(self, client: Client, msg: dict[str, Any]) -> None:
+        if client.closed:
+            return
+        try:
+            await client.send_json(msg)
+        except Exception:  # noqa: BLE001 - the client is gone
+            pass
+
+    async def _watch(self) -> None:
+        """Close sessions that went quiet or stopped acknowledging frames."""
+        cfg = self.settings
+        while True:
+            await asyncio.sleep(min(1.0, cfg.idle_timeout_s / 4, cfg.ack_timeout_s / 4))
+            now = self.clock()
+            for c in list(self.clients.values()):
+                reason = None
+                if now - c.last_message > cfg.idle_timeout_s:
+                    reason = f"idle: no message for {cfg.idle_timeout_s:g} s"
+                elif c.unacked_since is not None and now - c.unacked_since > cfg.ack_timeout_s:
+                    reason = f"frames unacknowledged for {cfg.ack_timeout_s:g} s"
+                if reason:
+                    metrics.ERRORS.labels("idle").inc()
+                    log.info("session closed", extra={"session": c.session.id, "reason": reason})
+                    self.remove(c)
+                    try:
+                        await c.ws.close(code=IDLE_CLOSE, reason=reason)
+                    except Exception:  # noqa: BLE001 - already gone
+                        pass
+
+
+class TokenBucket:
+    """At most `rate` messages a second on average, `burst` at once. `should_notify`
+    says whether a dropped message is the first since the bucket last had room: the
+    client is told once per window of overflow, then messages drop silently."""
+
+    def __init__(self, rate: float, burst: int, now: float):
+        self.rate, self.burst, self.tokens, self.t = rate, burst, float(burst), now
+        self._notified = False
+
+    def take(self, now: float) -> bool:
+        self.tokens = min(self.burst, self.tokens + (now - self.t) * self.rate)
+        self.t = now
+        if self.tokens >= 1.0:
+            self.tokens -= 1.0
+            if self.tokens >= self.burst / 2:   # the overflow is over: a new one is told again
+                self._notified = False
+            return True
+        return False
+
+    def should_notify(self) -> bool:
+        if self._notified:
+            return False
+        self._notified = True
+        return True
+
+
+async def websocket_endpoint(ws: WebSocket, streamer: Streamer, renderer_info: dict) -> None:
+    """/ws?<look query>: one session. See protocol.py for the messages."""
+    cfg = streamer.settings
+    await ws.accept()
+    addr = ws.client.host if ws.client else "?"
+    refusal = None
+    # check and register with no await in between: sessions connecting at once must not
+    # all pass the caps before any of them is counted
+    if len(streamer.clients) >= cfg.max_sessions:
+        metrics.ERRORS.labels("sessions_full").inc()
+        refusal = f"the server is full ({cfg.max_sessions} sessions); retry in a few seconds"
+    elif streamer.per_client(addr) >= cfg.max_sessions_per_client:
+        metrics.ERRORS.labels("sessions_per_client").inc()
+        refusal = (f"this address already has {cfg.max_sessions_per_client} sessions open; close one "
+                   "(another tab or window) or retry later")
+    if refusal:
+        await ws.send_json({"type": "error", "msg": refusal, "retry_after": 5})
+        await ws.close(code=1013, reason="try again later")
+        return
+    now = streamer.clock()
+    bucket = TokenBucket(cfg.messages_per_s, cfg.message_burst, now)
+    session = Session(uuid.uuid4().hex[:12], now)
+    client = Client(session, ws, addr, now)
+    streamer.add(client)
+    try:
+        query = ws.url.query
+        initial = session.apply(QueryMsg(type="query", query=query), now) if query else [session.state(now)]
+        await client.send_json({"type": "hello", "protocol": PROTOCOL, "session": session.id,
+                                "renderer": renderer_info.get("renderer"),
+                                "max_message": MAX_MESSAGE})
+        for out in initial:
+            await client.send_json(out)
+    except Exception:
+        streamer.remove(client)
+        raise
+    log.info("session opened", extra={"session": session.id, "query": query})
+    try:
+        while True:
+            msg = await ws.receive()
+            if msg["type"] == "websocket.disconnect":
+                break
+            data = msg.get("text")
+            if data is None:
+                data = msg.get("bytes") or b""
+            size = len(data.encode("utf-8")) if isinstance(data, str) else len(data)
+            if size > MAX_MESSAGE:
+                await ws.close(code=1009, reason=f"message over {MAX_MESSAGE} bytes")
+                break
+            client.last_message = streamer.clock()
+            if not bucket.take(streamer.clock()):
+                metrics.ERRORS.labels("rate").inc()
+                if bucket.should_notify():
+                    await client.send_json({"type": "error", "msg": f"over {cfg.messages_per_s:g} messages/s: "
+                                            "messages are dropped until the rate falls", "loc": ["message"]})
+                continue
+            try:
+                parsed = parse(data)
+            except ProtocolError as exc:
+                await client.send_json({"type": "error", "detail": exc.errors, "msg": str(exc)})
+                continue
+            acked = session.acked
+            for out in session.apply(parsed, streamer.clock()):
+                await client.send_json(out)
+            if session.acked != acked:   # progress: the oldest unacknowledged frame is newer
+                client.unacked_since = None if session.acked >= session.sent else streamer.clock()
+            streamer.wake()
+    except WebSocketDisconnect:
+        pass
+    finally:
+        streamer.remove(client)
+        log.info("session closed", extra={"session": session.id, "frames": session.sent})
+        if ws.client_state == WebSocketState.CONNECTED:
+            try:
+                await ws.close()
+            except Exception:  # noqa: BLE001
+                pass

@@ -1,0 +1,404 @@
+"""`fogbank bench`: fogbank against the seeds' tables, against raymarching, and against
+its own limits. Writes docs/bench.md and docs/bench.json.
+
+The machine is shared and noisy: every number is a median of repeats, and every
+comparison is a ratio of two things timed in the same run.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import os
+import platform
+import statistics
+import sys
+import time
+import urllib.request
+from pathlib import Path
+
+import numpy as np
+
+from fogbank.model import presets as P
+from fogbank.tools.child import ChildServer
+from fogbank.render.encode import encode
+from fogbank.model.params import FogParams, Homogeneous, StillParams
+from fogbank.render.renderer import Renderer, create_context
+
+TOL = 1.0 / 255.0
+
+
+def _median(f, n: int) -> float:
+    return statistics.median(f(i) for i in range(n))
+
+
+def _still(preset: str, w: int, h: int, **update) -> StillParams:
+    return StillParams.model_validate({**P.preset_dict(preset), "width": w, "height": h, **update})
+
+
+def _cpu() -> str:
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip() + f" ({os.cpu_count()} cores)"
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
+
+
+# ---------------------------------------------------------------- 1: analytic vs raymarched
+
+def _kind_looks() -> dict[str, StillParams]:
+    """One representative layer per exponential kind, from the presets, default camera."""
+    def first(preset, kind):
+        return next(l for l in FogParams.model_validate(P.preset_dict(preset)).layers if l.kind == kind)
+    layers = {
+        "homogeneous": Homogeneous(density=0.01),
+        "height": first("default", "height"),
+        "cosine": first("biri-fig6", "cosine"),
+        "polynomial": first("biri-fig7", "polynomial"),
+        "potential": first("biri-fig8", "potential"),
+        "sphere": first("quilez-spheres", "sphere"),
+    }
+    return {k: _still("default", 1280, 720, layers=[l.model_dump()], time=3.0) for k, l in layers.items()}
+
+
+def _reference(still: StillParams, invd: np.ndarray, view) -> np.ndarray:
+    """Float64 raw transmittance of every fog texel (scale 1), by the numpy closed forms."""
+    from fogbank.kinds.reference import layer_transmittance
+    h, w = invd.shape
+    py, px = np.mgrid[0:h, 0:w]
+    dirs = view.ray(px.ravel(), py.ravel(), w, h)
+    d = np.where(invd.ravel() > 0, 1.0 / np.maximum(invd.ravel(), 1e-30), still.effects.sky_distance)
+    O = np.broadcast_to(view.eye, dirs.shape)
+    t = np.full(len(d), still.time)
+    T = np.ones(len(d))
+    for layer in still.layers:
+        T *= layer_transmittance(layer, still, O, dirs, d, t)
+    return T.reshape(h, w)
+
+
+def analytic_vs_raymarch(r: Renderer, repeat: int = 9, max_steps: int = 2048) -> list[dict]:
+    rows = []
+    for kind, still in _kind_looks().items():
+        _, T_an, invd, view = r.fog_only(still)
+        ref = _reference(still, invd.astype(np.float64), view)
+        err_an = float(np.abs(T_an - ref).max())
+
+        def err_at(n):
+            _, T_rm, _, _ = r.fog_only(still, raymarch_steps=n)
+            return float(np.abs(T_rm - ref).max())
+        n, errs = 1, {}
+        while n <= max_steps:
+            errs[n] = err_at(n)
+            if errs[n] <= TOL:
+                break
+            n *= 2
+        if n > max_steps:
+            steps = None
+        else:
+            lo, hi = n // 2, n
+            while hi - lo > 1 and lo >= 1:
+                mid = (lo + hi) // 2
+                errs[mid] = err_at(mid)
+                lo, hi = (lo, mid) if errs[mid] <= TOL else (mid, hi)
+            steps = hi
+        use = steps or max_steps
+        r.fog_only(still, raymarch_steps=use, read=False)   # compile outside the timing
+        an, rm = [], []
+        for i in range(repeat):   # alternate, so that drift in the machine's load cancels
+            s = still.model_copy(update={"time": 3.0 + i})
+            an.append(r.fog_only(s, read=False))
+            rm.append(r.fog_only(s, raymarch_steps=use, read=False))
+        t_an, t_rm = statistics.median(an), statistics.median(rm)
+        rows.append({"kind": kind, "analytic_ms": t_an, "analytic_max_err": err_an,
+                     "raymarch_steps": steps, "raymarch_max_err": errs.get(use),
+                     "raymarch_ms": t_rm, "speedup": t_rm / t_an})
+        print(f"  {kind:12s} analytic {t_an:7.1f} ms (max|dT| {err_an:.1e})  raymarch "
+              f"{'>' if steps is None else ''}{use:5d} steps {t_rm:8.1f} ms  x{t_rm / t_an:.1f}")
+    return rows
+
+
+# ---------------------------------------------------------------- 2: Biri Table 1
+
+BIRI_TABLE1 = {"Polynomials": {"512x512": 3.5, "512x256": 6.7, "256x256": 12.5, "256x128": 20, "128x128": 30},
+               "Constant": {"512x512": 6.6, "512x256": 11.5, "256x256": 20, "256x128": 30, "128x128": 40}}
+
+
+def biri_table1(r: Renderer, repeat: int = 5) -> list[dict]:
+    """800x600 frames (scene pass redrawn each frame, as in the paper), fog at 1, 1/2,
+    1/4 scale (800x600, 400x300, 200x150 fog texels), polynomial fog (figure 7's two
+    polynomials) against constant fog."""
+    poly = FogParams.model_validate(P.preset_dict("biri-fig7")).layers
+    rows = []
+    for name, layers in (("Polynomials", [l.model_dump() for l in poly]),
+                         ("Constant", [Homogeneous(density=0.01).model_dump()])):
+        for scale in (1, 2, 4):
+            still = _still("default", 800, 600, layers=layers, effects={"fog_scale": scale})
+            r.render(still)
+
+            def frame(i):
+                s = still.model_copy(update={"camera": still.camera.model_copy(
+                    update={"yaw": still.camera.yaw + 0.01 * (i + 1)})})
+                t0 = time.perf_counter()
+                r.render(s)
+                return time.perf_counter() - t0
+            fps = 1.0 / _median(frame, repeat)
+            size = f"{-(-800 // scale)}x{-(-600 // scale)}"
+            rows.append({"fog": name, "fog_texture": size, "fps": fps})
+            print(f"  {name:11s} fog texture {size:8s} {fps:6.1f} fps")
+    return rows
+
+
+# ---------------------------------------------------------------- 3: Gawron Tables 2 and 3
+
+def gawron(r: Renderer, repeat: int = 7) -> dict:
+    """1920x1080: the fog pass alone, fog + blur fused (single pass), fog + blur as
+    separate passes; ms each, GPU work timed with glFinish around the passes."""
+    out = {}
+    for mode in ("off", "single", "separate"):
+        still = _still("gawron-distance", 1920, 1080, effects={
+            **P.preset_dict("gawron-distance")["effects"], "blur": mode})
+        r.render(still)
+
+        def once(i):
+            s = still.model_copy(update={"time": still.time + i + 1})
+            r.ctx.finish()
+            t0 = time.perf_counter()
+            r.render(s)   # scene pass cached: fog pass, composite, blur, readback
+            r.ctx.finish()
+            return (time.perf_counter() - t0) * 1000
+        out[mode] = _median(once, repeat)
+    read_ms = _median(lambda i: _timed(lambda: r._targets_for(1920, 1080).out.read(components=3)), repeat)
+    res = {"fog_ms": out["off"] - read_ms, "single_ms": out["single"] - read_ms,
+           "separate_ms": out["separate"] - read_ms, "readback_ms": read_ms}
+    res["single_over_separate"] = res["single_ms"] / res["separate_ms"]
+    print(f"  fog {res['fog_ms']:.1f} ms, fog+blur single {res['single_ms']:.1f} ms, separate "
+          f"{res['separate_ms']:.1f} ms, single/separate {res['single_over_separate']:.2f} "
+          f"(paper: 0.20, 0.44, 0.65 ms; 0.68)")
+    return res
+
+
+def _timed(f) -> float:
+    t0 = time.perf_counter()
+    f()
+    return (time.perf_counter() - t0) * 1000
+
+
+# ---------------------------------------------------------------- 4-6: the service
+
+def streaming(r: Renderer, srv: ChildServer, seconds: float) -> list[dict]:
+    from fogbank.tools.bench_stream import control_latency, delivered_fps
+    from fogbank.stream.session import PREVIEW_QUALITY
+    rows = []
+    ws = srv.url.replace("http", "ws", 1)
+    for w, h in ((640, 360), (1280, 720), (1920, 1080)):
+        for orbit in (False, True):
+            got = asyncio.run(delivered_fps(ws, "v=1", w, h, seconds=seconds, orbit=orbit))
+            # the same frames without the network: render + encode in this process
+            still = _still("default", w, h)
+            if orbit:
+                still = still.model_copy(update={"effects": still.effects.model_copy(
+                    update={"fog_scale": 2 if w * h <= 640 * 360 else 4})})
+            q = PREVIEW_QUALITY if orbit else 80
+
+            def frame(i):
+                s = still.model_copy(update={"time": 1.0 + i * 0.033})
+                if orbit:
+                    s = s.model_copy(update={"camera": s.camera.model_copy(update={"yaw": 2.0 * i})})
+                t0 = time.perf_counter()
+                img = r.render(s, slot="bench-stream", msaa=not orbit)
+                encode(img, "jpg", q)
+                return time.perf_counter() - t0
+            frame(0)
+            local = 1.0 / _median(frame, 7)
+            row = {"size": f"{w}x{h}", "camera": "orbit" if orbit else "still", "delivered_fps": got["fps"],
+                   "render_encode_fps": local, "ratio": got["fps"] / local,
+                   "server_render_ms": got.get("render_ms"), "server_encode_ms": got.get("encode_ms"),
+                   "frame_kb": got.get("kb")}
+            rows.append(row)
+            print(f"  {w}x{h} {row['camera']:5s} delivered {got['fps']:5.1f} fps, render+encode "
+                  f"{local:5.1f} fps, ratio {row['ratio']:.2f}")
+        lat = asyncio.run(control_latency(ws, "v=1", w, h, changes=20))
+        rows.append({"size": f"{w}x{h}", "latency": lat})
+        print(f"  {w}x{h} control-to-frame p50 {lat['p50_ms']:.0f} p95 {lat['p95_ms']:.0f} "
+              f"p99 {lat['p99_ms']:.0f} ms")
+    return rows
+
+
+def concurrency(srv: ChildServer, seconds: float) -> list[dict]:
+    from fogbank.tools.bench_stream import delivered_fps
+    ws = srv.url.replace("http", "ws", 1)
+    rows = []
+    for n in (1, 2, 4, 8):
+        async def run_all():
+            return await asyncio.gather(*[delivered_fps(ws, "v=1", 640, 360, seconds=seconds)
+                                          for _ in range(n)])
+        res = asyncio.run(run_all())
+        fps = [x["fps"] for x in res]
+        row = {"clients": n, "per_client_fps": fps, "aggregate_fps": sum(fps),
+               "fairness": min(fps) / max(fps) if max(fps) > 0 else 0.0, "server_rss_mb": srv.rss_mb()}
+        rows.append(row)
+        print(f"  {n} clients: aggregate {row['aggregate_fps']:.1f} fps, per client "
+              f"{min(fps):.1f}..{max(fps):.1f}, fairness {row['fairness']:.2f}, RSS {row['server_rss_mb']:.0f} MB")
+    return rows
+
+
+def stills(srv: ChildServer, repeat: int = 3) -> dict:
+    out = {}
+    for fmt in ("png", "jpg", "webp"):
+        def once(i):
+            url = f"{srv.url}/api/still.{fmt}?width=1920&height=1080&time={10 + i + len(out) * 10}"
+            t0 = time.perf_counter()
+            with urllib.request.urlopen(url, timeout=120) as resp:
+                resp.read()
+            return (time.perf_counter() - t0) * 1000
+        once(-5)
+        out[fmt] = _median(once, repeat)
+        print(f"  1920x1080 {fmt:4s} {out[fmt]:7.1f} ms")
+    return out
+
+
+def process_boundary(n: int = 300) -> dict:
+    """What handing a job to a render worker process and its result back costs: an empty
+    job's round trip, and a 640x360 frame's total time minus its time in the worker."""
+    import asyncio
+
+    from fogbank.workers import worker
+    from fogbank.settings import Settings
+    from fogbank.workers.supervisor import Supervisor
+
+    async def measure():
+        sup = Supervisor(Settings(batch_workers=0))
+        await sup.start()
+        try:
+            slot = sup.interactive.slots[0]
+            for _ in range(20):
+                await sup.call(slot, worker.noop, deadline=30)
+            rt = []
+            for _ in range(n):
+                t0 = time.perf_counter()
+                await sup.call(slot, worker.noop, deadline=30)
+                rt.append((time.perf_counter() - t0) * 1000)
+            still = _still("default", 640, 360)
+            hand = []
+            for i in range(60):
+                st = still.model_copy(update={"time": 0.03 * i})
+                t0 = time.perf_counter()
+                out = await sup.call(slot, worker.frame, st, "bench", True, 80, deadline=30)
+                hand.append((time.perf_counter() - t0) * 1000 - out["run_s"] * 1000)
+            return rt, hand[10:]
+        finally:
+            await sup.stop()
+    rt, hand = asyncio.run(measure())
+    rt.sort()
+    hand.sort()
+    out = {"noop_p50_ms": rt[len(rt) // 2], "noop_p90_ms": rt[int(len(rt) * 0.9)],
+           "frame_handover_p50_ms": hand[len(hand) // 2], "frame_handover_p90_ms": hand[int(len(hand) * 0.9)]}
+    print(f"  empty job round trip p50 {out['noop_p50_ms']:.2f} ms; 640x360 frame hand-over "
+          f"p50 {out['frame_handover_p50_ms']:.2f} ms")
+    return out
+
+
+# ---------------------------------------------------------------- report
+
+def run(out_dir: str = "docs", quick: bool = False) -> dict:
+    r = Renderer(create_context())
+    info = r.info()
+    seconds = 3.0 if quick else 6.0
+    res: dict = {"command": " ".join(["fogbank"] + sys.argv[1:]), "cpu": _cpu(), "gl": info,
+                 "date": time.strftime("%Y-%m-%d %H:%M:%S %Z")}
+    print(f"fogbank bench on {res['cpu']}, {info['renderer']}")
+    print("1. analytic fog against raymarching (fog pass, 1280x720, max|dT| <= 1/255)")
+    res["analytic_vs_raymarch"] = analytic_vs_raymarch(r, max_steps=512 if quick else 2048)
+    print("2. Biri Table 1 (800x600)")
+    res["biri_table1"] = biri_table1(r)
+    print("3. Gawron Tables 2 and 3 (1920x1080)")
+    res["gawron"] = gawron(r)
+    srv = ChildServer()
+    try:
+        print("4. streaming (default preset)")
+        res["streaming"] = streaming(r, srv, seconds)
+        print("5. concurrency (640x360)")
+        res["concurrency"] = concurrency(srv, seconds)
+        print("6. stills over HTTP")
+        res["stills_ms"] = stills(srv)
+    finally:
+        srv.stop()
+    print("7. the process boundary (web process <-> render worker)")
+    res["process_boundary"] = process_boundary()
+    Path(out_dir).mkdir(parents=True, exist_ok=True)
+    Path(out_dir, "bench.json").write_text(json.dumps(res, indent=1))
+    Path(out_dir, "bench.md").write_text(markdown(res))
+    print(f"wrote {out_dir}/bench.md and {out_dir}/bench.json")
+    return res
+
+
+def markdown(res: dict) -> str:
+    L = ["# fogbank benchmark", "",
+         f"`{res['command']}` on {res['cpu']}, GL: {res['gl']['renderer']} ({res['gl']['version']}), "
+         f"{res['date']}. Medians of repeats; ratios are of two things timed in the same run.", "",
+         "## 1. Analytic fog against raymarching", "",
+         "Fog pass alone at 1280x720, one layer of each exponential kind (from the presets), "
+         "default camera. The raymarch is the same pass with the midpoint rule over the "
+         "density; its steps are the fewest that keep max |T - T_ref| <= 1/255 over the frame "
+         "against the float64 closed form.", "",
+         "| kind | analytic ms | analytic max dT | raymarch steps | raymarch ms | raymarch / analytic |",
+         "|---|---|---|---|---|---|"]
+    for row in res["analytic_vs_raymarch"]:
+        steps = row["raymarch_steps"] if row["raymarch_steps"] else "> 2048"
+        L.append(f"| {row['kind']} | {row['analytic_ms']:.1f} | {row['analytic_max_err']:.1e} | {steps} | "
+                 f"{row['raymarch_ms']:.1f} | {row['speedup']:.1f}x |")
+    L += ["", "## 2. Biri et al. 2002, Table 1", "",
+          "800x600 frames, whole frame (scene pass redrawn, fog, composite, readback). Our fog "
+          "targets are 1/1, 1/2 and 1/4 of the frame; the paper's textures are listed by texel count.", "",
+          "| fog | fog texels (ours) | fps (ours) | paper texture | paper fps |", "|---|---|---|---|---|"]
+    paper_match = {"800x600": "512x512", "400x300": "256x256", "200x150": "128x128"}
+    for row in res["biri_table1"]:
+        pm = paper_match[row["fog_texture"]]
+        L.append(f"| {row['fog']} | {row['fog_texture']} | {row['fps']:.1f} | {pm} | "
+                 f"{BIRI_TABLE1[row['fog']][pm]} |")
+    g = res["gawron"]
+    L += ["", "## 3. Gawron & Boryczka 2018, Tables 2 and 3", "",
+          "1920x1080, the gawron-distance preset, scene pass cached, readback subtracted.", "",
+          "| | ours (ms) | paper (ms, GTX 970) |", "|---|---|---|",
+          f"| fog alone | {g['fog_ms']:.1f} | 0.20 |",
+          f"| fog + blur, single pass | {g['single_ms']:.1f} | 0.44 |",
+          f"| fog + blur, separate passes | {g['separate_ms']:.1f} | 0.65 |",
+          f"| single / separate | {g['single_over_separate']:.2f} | 0.68 |"]
+    L += ["", "## 4. Streaming", "",
+          "Default preset, a real WebSocket client on 127.0.0.1 acknowledging every frame. "
+          "'render+encode' is the same frames made in this process without the network.", "",
+          "| size | camera | delivered fps | render+encode fps | ratio | server render ms | encode ms | KB |",
+          "|---|---|---|---|---|---|---|---|"]
+    for row in res["streaming"]:
+        if "latency" in row:
+            continue
+        L.append(f"| {row['size']} | {row['camera']} | {row['delivered_fps']:.1f} | {row['render_encode_fps']:.1f} | "
+                 f"{row['ratio']:.2f} | {row['server_render_ms'] or 0:.1f} | {row['server_encode_ms'] or 0:.1f} | "
+                 f"{row['frame_kb'] or 0:.0f} |")
+    L += ["", "Control change to the first frame that shows it:", "", "| size | p50 ms | p95 ms | p99 ms |",
+          "|---|---|---|---|"]
+    for row in res["streaming"]:
+        if "latency" in row:
+            lat = row["latency"]
+            L.append(f"| {row['size']} | {lat['p50_ms']:.0f} | {lat['p95_ms']:.0f} | {lat['p99_ms']:.0f} |")
+    L += ["", "## 5. Concurrency (640x360)", "",
+          "| clients | aggregate fps | per client fps | slowest / fastest | server RSS MB |", "|---|---|---|---|---|"]
+    for row in res["concurrency"]:
+        fps = row["per_client_fps"]
+        L.append(f"| {row['clients']} | {row['aggregate_fps']:.1f} | {min(fps):.1f} - {max(fps):.1f} | "
+                 f"{row['fairness']:.2f} | {row['server_rss_mb']:.0f} |")
+    s = res["stills_ms"]
+    L += ["", "## 6. Stills (1920x1080, over HTTP, uncached)", "", "| format | ms |", "|---|---|"]
+    L += [f"| {k} | {v:.0f} |" for k, v in s.items()]
+    pb = res.get("process_boundary")
+    if pb:
+        L += ["", "## 7. The process boundary", "",
+              "GL runs in render worker processes; each job and its result cross a pipe "
+              "(pebble). Measured through the supervisor in this process.", "",
+              "| | p50 ms | p90 ms |", "|---|---|---|",
+              f"| empty job, round trip | {pb['noop_p50_ms']:.2f} | {pb['noop_p90_ms']:.2f} |",
+              f"| 640x360 frame, total minus time in the worker | {pb['frame_handover_p50_ms']:.2f} | "
+              f"{pb['frame_handover_p90_ms']:.2f} |"]
+    return "\n".join(L) + "\n"

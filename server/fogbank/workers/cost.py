@@ -1,0 +1,157 @@
+"""What a look costs to render, estimated before rendering: seconds and GL memory.
+
+The coefficients are seconds measured on the reference machine (2 CPU cores, Mesa
+llvmpipe) at full fog resolution; `cost_scale` (a setting) scales them for faster
+hardware. They are conservative fits of `fogbank`'s own renders (see
+tests/gl/test_cost.py, which holds the estimate to within a factor of the measured time
+for every kind): the point is to refuse a look that would hold a worker for minutes, and
+to route cheap stills to the interactive worker, not to predict milliseconds.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from fogbank.kinds.packing import uses_noise, variant
+from fogbank.model.params import Cosine, FogParams, Noise, Particles, StillParams
+from fogbank.render.renderer import GBUFFER_BPP, LINEAR_BPP, MSAA_BPP, OUT_BPP
+
+# seconds on the reference machine
+SCENE_FIXED_S = 0.10          # shadow map check, terrain vertex work, programs
+SCENE_S_PER_MPX = 0.25        # the scene pass with 4x MSAA, per megapixel
+SCENE_PREVIEW_S_PER_MPX = 0.12
+COMPOSITE_S_PER_MPX = 0.05
+BLUR_S_PER_MPX = 0.20
+ENCODE_S_PER_MPX = {"jpg": 0.01, "png": 0.04, "webp": 0.08}
+# fog pass, per layer, per megapixel of fog target
+LAYER_S_PER_MPX = {"homogeneous": 0.03, "height": 0.03, "cosine": 0.02, "polynomial": 0.04,
+                   "potential": 0.04, "sphere": 0.04, "distance": 0.05, "noise": 0.05,
+                   "particles": 0.0}
+COSINE_TERM_S_PER_MPX = 0.01
+NOISE_SAMPLE_S_PER_MPX = 0.022   # volume mode, per sample along the ray
+PARTICLE_S_PER_MPX = 0.0011      # one particle quad of radius 20 m, per megapixel
+PARTICLE_SIM_S = 0.5             # simulating 1024 particles of life 128 steps, once per time
+# llvmpipe compiles a fog program to machine code at its first draw, and that time grows
+# faster than the program: ~0.3 s for 11 height layers, 1.8 s for 16 cosine terms, 5.8 s
+# for 32, and for volume noise it doubles with each layer past about 10 (1.9 s for 12,
+# 7.8 s for 14, over 30 s for 16). Fitted by hand to those measurements (16x16 frames,
+# first draw minus second); charged only when the worker has not drawn that program yet.
+JIT_S_PER_UNIT = 0.03
+JIT_EXPONENT = 1.3
+JIT_COSINE_TERM_UNITS = 1.5
+JIT_NOISE_VOLUME_S = 0.95        # times 2 ** (volume noise layers - 11)
+
+
+@dataclass
+class Cost:
+    seconds: float
+    memory: int                         # bytes of GL targets and images
+    parts: dict[str, float] = field(default_factory=dict)   # seconds by contributor
+
+    def biggest(self, n: int = 3) -> list[str]:
+        return [k for k, v in sorted(self.parts.items(), key=lambda kv: -kv[1])[:n] if v > 0]
+
+
+def _layer_seconds(layer, fog_mpx: float) -> float:
+    s = LAYER_S_PER_MPX[layer.kind] * fog_mpx
+    if isinstance(layer, Cosine):
+        s += COSINE_TERM_S_PER_MPX * len(layer.terms) * fog_mpx
+    elif isinstance(layer, Noise) and layer.mode == "volume":
+        s += NOISE_SAMPLE_S_PER_MPX * layer.samples * fog_mpx
+    elif isinstance(layer, Particles):
+        cover = min(max((layer.radius / 20.0) ** 2, 0.05), 16.0)
+        s += PARTICLE_S_PER_MPX * layer.count * cover * fog_mpx + particle_sim_seconds(layer)
+    return s
+
+
+def program_key(still: StillParams) -> tuple:
+    """What a worker's compiled fog program depends on: the layers' variant and the fog
+    scale (a compile-time define)."""
+    return variant(still), still.effects.fog_scale
+
+
+def jit_seconds(variant: tuple) -> float:
+    """Estimated first-draw compile time of the fog program for a layers.variant() key."""
+    units = 0.0
+    volume = 0
+    for kind, terms in variant:
+        if kind == "particles":
+            continue
+        units += JIT_COSINE_TERM_UNITS * terms if kind == "cosine" else 1.0
+        volume += kind == "noise/volume"
+    s = JIT_S_PER_UNIT * units ** JIT_EXPONENT
+    if volume > 8:
+        s += JIT_NOISE_VOLUME_S * 2.0 ** (volume - 11)
+    return s
+
+
+def particle_sim_seconds(layer: Particles) -> float:
+    return PARTICLE_SIM_S * layer.count / 1024 * layer.life_max / 128
+
+
+def estimate(still: StillParams, msaa: bool = True, fmt: str = "jpg", scale: float = 1.0,
+             compiled: bool = False) -> Cost:
+    """Seconds and memory to render and encode `still` (`scale` multiplies seconds); the
+    fog program's first-draw compile is included unless `compiled`."""
+    px = still.width * still.height
+    mpx = px / 1e6
+    e = still.effects
+    fog_mpx = mpx / (e.fog_scale ** 2)
+    parts: dict[str, float] = {
+        "width*height (scene pass)": SCENE_FIXED_S + (SCENE_S_PER_MPX if msaa else SCENE_PREVIEW_S_PER_MPX) * mpx,
+        "width*height (composite, encode)": (COMPOSITE_S_PER_MPX + ENCODE_S_PER_MPX.get(fmt, 0.08)) * mpx,
+    }
+    if e.blur != "off":
+        parts["effects.blur"] = BLUR_S_PER_MPX * mpx
+    for i, layer in enumerate(still.layers):
+        if layer.enabled:
+            parts[f"layers[{i}] ({_describe(layer)})"] = _layer_seconds(layer, fog_mpx)
+    n = still.noise
+    if uses_noise(still) and (n.size, n.octaves, n.blur, n.seed) != DEFAULT_BAKE:
+        parts[f"noise.size = {n.size} (baking the noise tile, once per worker)"] = bake_seconds(n)
+    if not compiled:
+        key = variant(still)
+        parts[f"compiling the fog program for {len(key)} layers (once per worker)"] = jit_seconds(key)
+    memory = px * (OUT_BPP + GBUFFER_BPP + 3 + 4) + int(fog_mpx * 1e6) * 8
+    if msaa:
+        memory += px * MSAA_BPP
+    if e.blur == "separate":
+        memory += px * LINEAR_BPP
+    seconds = sum(parts.values()) * scale
+    return Cost(seconds, memory, {k: v * scale for k, v in parts.items()})
+
+
+BAKE_S_PER_VOXEL_OCTAVE = 7.5e-7   # noise.bake on this machine: 6 s for 126^3 and 4 octaves
+DEFAULT_BAKE = (64, 4, 2, 7)       # baked by every worker's warm-up draw
+
+
+def bake_seconds(n) -> float:
+    """Seconds to bake a noise tile (NoiseBake) that a worker has not baked yet."""
+    return BAKE_S_PER_VOXEL_OCTAVE * n.size ** 3 * n.octaves
+
+
+def _describe(layer) -> str:
+    if isinstance(layer, Noise) and layer.mode == "volume":
+        return f"noise, volume, {layer.samples} samples"
+    if isinstance(layer, Particles):
+        return f"particles, {layer.count} of radius {layer.radius:g} m"
+    if isinstance(layer, Cosine):
+        return f"cosine, {len(layer.terms)} terms"
+    return layer.kind
+
+
+def transmittance_seconds(fog: FogParams, rays: int, distinct_times: int, scale: float = 1.0,
+                          groups: int = 1) -> Cost:
+    """Rays cost little; each distinct time simulates every particle layer once; each
+    group of rays sharing an origin and a time is one draw, its layers packed relative
+    to that origin (measured on llvmpipe: ~40 us + ~28 us per layer + 0.15 us per particle)."""
+    sim = sum(particle_sim_seconds(l) for l in fog.layers if isinstance(l, Particles) and l.enabled)
+    particles = sum(l.count for l in fog.layers if isinstance(l, Particles) and l.enabled)
+    parts = {"rays": 2e-6 * rays * max(1, len(fog.layers)),
+             "distinct ray times x particle simulation": distinct_times * sim,
+             "distinct ray origins x packing": groups * (40e-6 + 28e-6 * len(fog.layers)
+                                                         + 0.15e-6 * particles)}
+    n = fog.noise
+    if uses_noise(fog) and (n.size, n.octaves, n.blur, n.seed) != DEFAULT_BAKE:
+        parts["noise bake"] = bake_seconds(n)
+    return Cost(sum(parts.values()) * scale, rays * 48, {k: v * scale for k, v in parts.items()})

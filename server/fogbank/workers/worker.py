@@ -1,0 +1,219 @@
+"""What runs inside a render worker process: the GL context and the jobs it serves.
+
+A worker is a process started by the supervisor (supervisor.py) through a pebble
+ProcessPool of one worker. `init` builds its own EGL context and Renderer; each job
+renders and encodes, and only encoded bytes (or a small array) go back to the web
+process. A job past its deadline is stopped by the supervisor killing this process, the
+only sure way to stop a GL call, so SIGTERM is left at its default action (die now)
+rather than a Python handler that would wait for the GL call to return.
+
+Every job's result carries the worker's pid and resident memory. After a job the worker
+holds itself to its memory budget: over it, it frees its GL caches and returns heap to
+the system; still over, it asks to be recycled (the supervisor replaces it between jobs).
+"""
+
+from __future__ import annotations
+
+import ctypes
+import gc
+import os
+import signal
+import time
+from typing import Any
+
+import numpy as np
+
+from fogbank.workers import proctree
+
+_renderer = None
+_config: dict[str, Any] = {}
+
+
+def rss_bytes() -> int:
+    """This process's resident set size."""
+    return proctree.rss_bytes(os.getpid())
+
+
+M_MMAP_THRESHOLD = -3
+PR_SET_PDEATHSIG = 1
+
+
+def _libc():
+    try:
+        return ctypes.CDLL("libc.so.6")
+    except OSError:
+        return None
+
+
+def _trim_heap() -> None:
+    """Give freed heap back to the system (glibc keeps it otherwise)."""
+    libc = _libc()
+    if libc is not None:
+        libc.malloc_trim(0)
+
+
+def _fix_mmap_threshold() -> None:
+    """Render targets live in malloc'd memory (llvmpipe). glibc raises its mmap threshold
+    each time a large block is freed, after which large blocks come from the heap, where
+    freed targets fragment and are never returned: RSS grew to twice the cache. A fixed
+    threshold keeps every block over 128 KiB in its own mapping, returned on release."""
+    libc = _libc()
+    if libc is not None:
+        libc.mallopt(M_MMAP_THRESHOLD, 128 * 1024)
+
+
+def _build():
+    from fogbank.render.renderer import Renderer, create_context
+    return Renderer(create_context(_config["backend"], _config["device"]), cache_bytes=_config["cache_bytes"])
+
+
+def init(backend: str, device: int | None, nice: int, cache_bytes: int, memory_bytes: int) -> None:
+    """pebble initializer: one EGL context and Renderer for this process's life."""
+    global _renderer
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)   # a kill lands even inside a GL call
+    libc = _libc()
+    if libc is not None:
+        libc.prctl(PR_SET_PDEATHSIG, signal.SIGKILL)  # never outlive the web process
+    if nice:
+        os.nice(nice)   # batch work yields the cores to interactive frames
+    _fix_mmap_threshold()
+    _config.update(backend=backend, device=device, cache_bytes=cache_bytes, memory_bytes=memory_bytes)
+    _renderer = _build()
+    _warm_up()
+
+
+def _warm_up() -> None:
+    """Draw the default look once, small, with and without MSAA: builds the scene's
+    meshes and compiles the programs a first frame needs, so that the first client of a
+    new (or replaced) worker does not wait for them."""
+    from fogbank.model import presets
+    from fogbank.model.params import StillParams
+    still = StillParams.model_validate({**presets.preset_dict("default"), "width": 64, "height": 36})
+    _renderer.render(still, slot="warm-up")
+    _renderer.render(still, slot="warm-up", msaa=False)
+    _renderer.drop_slot("warm-up")
+
+
+def _gl_failed(exc: BaseException) -> bool:
+    name = type(exc).__module__ + "." + type(exc).__name__
+    return "moderngl" in name or "GL error" in str(exc)
+
+
+def _run(fn) -> dict[str, Any]:
+    """Run `fn(renderer)`; a GL failure rebuilds the renderer (the job still fails) so
+    the next job finds a working context. Adds pid, memory and recycle advice."""
+    global _renderer
+    t0 = time.perf_counter()
+    try:
+        out = fn(_renderer)
+        err = _renderer.ctx.error
+        if err != "GL_NO_ERROR":
+            raise RuntimeError(f"GL error after a job: {err}")
+    except BaseException as exc:
+        if _gl_failed(exc) or not _healthy():
+            try:
+                _renderer.ctx.release()
+            except Exception:  # noqa: BLE001 - the context is already gone
+                pass
+            _renderer = _build()
+        raise
+    out["run_s"] = time.perf_counter() - t0
+    out["pid"] = os.getpid()
+    out["rss"] = rss_bytes()
+    out["recycle"] = False
+    budget = _config.get("memory_bytes", 0)
+    if budget and out["rss"] > budget:
+        _renderer.release_caches()
+        gc.collect()
+        _trim_heap()
+        out["rss"] = rss_bytes()
+        out["recycle"] = out["rss"] > budget
+    return out
+
+
+def _healthy() -> bool:
+    try:
+        return isinstance(_renderer.ctx.error, str)
+    except Exception:  # noqa: BLE001
+        return False
+
+
+# ---------------------------------------------------------------- jobs
+
+
+def probe() -> dict[str, Any]:
+    """A tiny draw and readback: proves this worker's GL pipeline answers."""
+    def fn(r):
+        t0 = time.perf_counter()
+        ok = r.probe()
+        if not ok:   # the pipeline answers but draws wrong: not alive
+            raise RuntimeError("GL error after a job: the probe read back the wrong colour")
+        return {"ok": ok, "ms": (time.perf_counter() - t0) * 1000.0, "info": r.info()}
+    return _run(fn)
+
+
+def frame(still, slot: str, msaa: bool, quality: int) -> dict[str, Any]:
+    """One stream frame as JPEG; `slot` names the session whose scene pass is cached."""
+    from fogbank.render.encode import encode
+
+    def fn(r):
+        t0 = time.perf_counter()
+        img = r.render(still, slot=slot, msaa=msaa)
+        t1 = time.perf_counter()
+        data = encode(img, "jpg", quality)
+        return {"data": data, "render_ms": (t1 - t0) * 1000.0,
+                "encode_ms": (time.perf_counter() - t1) * 1000.0}
+    return _run(fn)
+
+
+def still(still, fmt: str) -> dict[str, Any]:
+    """A still image, encoded as `fmt` (png, jpg, webp)."""
+    from fogbank.render.encode import encode
+
+    def fn(r):
+        t0 = time.perf_counter()
+        img = r.render(still)
+        t1 = time.perf_counter()
+        data = encode(img, fmt)
+        return {"data": data, "render_ms": (t1 - t0) * 1000.0,
+                "encode_ms": (time.perf_counter() - t1) * 1000.0}
+    return _run(fn)
+
+
+def transmittance(fog, origins: np.ndarray, directions: np.ndarray, lengths: np.ndarray,
+                  times: np.ndarray) -> dict[str, Any]:
+    def fn(r):
+        return {"T": r.transmittance(fog, origins, directions, lengths, times)}
+    return _run(fn)
+
+
+def noop() -> dict[str, Any]:
+    """An empty job: what the process boundary alone costs (benchmark)."""
+    return _run(lambda r: {})
+
+
+def drop_slot(slot: str) -> dict[str, Any]:
+    def fn(r):
+        r.drop_slot(slot)
+        return {}
+    return _run(fn)
+
+
+def sleep(seconds: float) -> dict[str, Any]:
+    """Holds the worker for `seconds` without yielding (a stand-in for a GL call that
+    hangs; fault-injection tests use it). time.sleep would let a Python signal handler
+    run; this does not matter here since SIGTERM is at its default action."""
+    def fn(r):
+        time.sleep(seconds)
+        return {}
+    return _run(fn)
+
+
+def lose_context() -> dict[str, Any]:
+    """Releases the worker's GL context, as a lost device would (fault-injection tests):
+    this job fails and the worker rebuilds its renderer for the next one."""
+    def fn(r):
+        r.ctx.release()
+        r.ctx.error  # raises: the context is gone
+        return {}
+    return _run(fn)
