@@ -1,8 +1,21 @@
 import os
+from pathlib import Path
 
 import pytest
 
 os.environ.setdefault("FOGBANK_GL_BACKEND", "egl")
+
+# Tests mirror the package by tier: tests/<tier>/test_<module>.py. The folder is the
+# marker, so `pytest -m unit` runs the fast tier (no GL context, no server, no browser).
+TIERS = ("unit", "gl", "service", "browser")
+
+
+def pytest_collection_modifyitems(config, items):
+    for item in items:
+        tier = Path(str(item.fspath)).parent.name
+        if tier not in TIERS:
+            raise pytest.UsageError(f"{item.nodeid}: a test lives in tests/<tier>/, tier one of {TIERS}")
+        item.add_marker(getattr(pytest.mark, tier))
 
 
 @pytest.fixture(scope="session")

@@ -24,7 +24,7 @@ def test_schemathesis_all_checks_fixed_seed(tmp_path):
     try:
         st = Path(sys.executable).parent / "schemathesis"
         env = {**os.environ, "SCHEMATHESIS_HOOKS": HOOKS,
-               "PYTHONPATH": str(Path(__file__).parent) + os.pathsep + os.environ.get("PYTHONPATH", "")}
+               "PYTHONPATH": str(Path(__file__).parents[1]) + os.pathsep + os.environ.get("PYTHONPATH", "")}
         r = subprocess.run([str(st), "run", srv.url + "/openapi.json", "--checks", "all", "--seed", "42",
                             "--max-examples", "40", "--no-color",
                             "--report-dir", str(tmp_path)],

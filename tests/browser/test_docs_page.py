@@ -8,7 +8,7 @@ from pathlib import Path
 
 from servers import Server
 
-SHOTS = Path(__file__).resolve().parents[1] / "out" / "screenshots"
+SHOTS = Path(__file__).resolve().parents[2] / "out" / "screenshots"
 
 
 def test_docs_render_offline_under_the_csp(browser):

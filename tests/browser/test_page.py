@@ -17,7 +17,7 @@ from PIL import Image
 
 from servers import Server
 
-SHOTS = Path(__file__).resolve().parents[1] / "out" / "screenshots"
+SHOTS = Path(__file__).resolve().parents[2] / "out" / "screenshots"
 
 
 @pytest.fixture(scope="module")
