@@ -175,6 +175,74 @@ def tau_sphere(layer, fog, O, w, d, time):
     return _quad(f, lo, hi) if hi > lo else 0.0
 
 
+# ------------------------------------------------------------------ bodies (box, ellipsoid)
+
+
+def body_frame(layer, x):
+    """Points x in the body's frame: yaw about +y, then pitch about the body's x, then roll
+    about its z (intrinsic Y-X'-Z''), written here with scipy's rotations."""
+    from scipy.spatial.transform import Rotation
+    rot = Rotation.from_euler("YXZ", [layer.yaw, layer.pitch, layer.roll], degrees=True)
+    return rot.inv().apply(np.atleast_2d(np.asarray(x, dtype=np.float64) - np.asarray(layer.center)))
+
+
+def body_level(layer, x) -> float:
+    """< 0 inside the body, > 0 outside; convex along any line (the box's largest excess
+    over a half extent, the ellipsoid's r^2 - 1)."""
+    p = body_frame(layer, x)[0]
+    if layer.kind == "box":
+        return float(np.max(np.abs(p) - np.asarray(layer.half_size)))
+    return float(np.sum((p / np.asarray(layer.radii)) ** 2) - 1.0)
+
+
+def body_crossings(layer, O, w, d, iters=200) -> list[float]:
+    """Where O + w s, s in [0, d], enters and leaves the body (O in the body's unslid
+    frame): the convex level's minimum by golden sections, then its zeros by bisection."""
+    O, w = np.asarray(O, dtype=np.float64), np.asarray(w, dtype=np.float64)
+
+    def f(s):
+        return body_level(layer, O + w * s)
+
+    lo, hi, g = 0.0, float(d), (math.sqrt(5) - 1) / 2
+    for _ in range(iters):
+        a, b = hi - g * (hi - lo), lo + g * (hi - lo)
+        if f(a) <= f(b):
+            hi = b
+        else:
+            lo = a
+    m = (lo + hi) / 2
+    if f(m) >= 0:
+        return []
+    out = []
+    for a, b in ((0.0, m), (float(d), m)):   # from outside (a) toward the inside (b)
+        if f(a) <= 0:
+            continue
+        for _ in range(iters):
+            mid = (a + b) / 2
+            a, b = (mid, b) if f(mid) > 0 else (a, mid)
+        out.append((a + b) / 2)
+    return sorted(out)
+
+
+def tau_body(layer, fog, O, w, d, time):
+    """A box's or an ellipsoid's optical depth (signed: a negative density carves)."""
+    Os = slid(layer, fog, O, time)
+    cuts = body_crossings(layer, Os, w, d)
+
+    def f_inside(s):
+        return body_level(layer, Os + w * s) <= 0
+
+    edges = [0.0] + cuts + [float(d)]
+    total = 0.0
+    for a, b in zip(edges[:-1], edges[1:]):
+        if b > a and f_inside((a + b) / 2):
+            if layer.kind == "box":
+                total += _quad(lambda s: layer.density, a, b)
+            else:
+                total += _quad(lambda s: layer.density * max(0.0, -body_level(layer, Os + w * s)), a, b)
+    return total
+
+
 # ------------------------------------------------------------------ noise
 
 
@@ -235,6 +303,7 @@ def noise_line_integral(tex, O, w, d, scale):
 
 EXPONENTIAL = {"homogeneous": tau_homogeneous, "height": tau_height, "cosine": tau_cosine,
                "polynomial": tau_polynomial, "potential": tau_potential, "sphere": tau_sphere}
+SIGNED = {"box": tau_body, "ellipsoid": tau_body}   # may be negative (carving)
 
 
 def particle_log_clarity(layer, state, O, w, d):
@@ -265,6 +334,7 @@ def raw(fog, O, w, d, time, tex=None, states=None):
     tau = 0.0
     log_tau = -math.inf   # logs of optical depths that float64 cannot hold (height fog)
     log_direct = 0.0
+    signed = 0.0          # optical depths that may be negative (carving bodies)
     for i, layer in enumerate(fog.layers):
         if not layer.enabled:
             continue
@@ -272,6 +342,8 @@ def raw(fog, O, w, d, time, tex=None, states=None):
             log_tau = np.logaddexp(log_tau, tau_height(layer, fog, Os, w, ds, time))
         elif layer.kind in EXPONENTIAL:
             tau += EXPONENTIAL[layer.kind](layer, fog, Os, w, ds, time)
+        elif layer.kind in SIGNED:
+            signed += SIGNED[layer.kind](layer, fog, Os, w, ds, time)
         elif layer.kind == "noise":
             if layer.mode == "volume":
                 integral = noise_line_integral(tex, slid(layer, fog, Os, time), w, ds, layer.scale)
@@ -294,7 +366,7 @@ def raw(fog, O, w, d, time, tex=None, states=None):
             log_direct += particle_log_clarity(layer, states[i], Os, w, ds)
         else:
             raise AssertionError(f"no truth for layer kind {layer.kind!r}")
-    return float(np.logaddexp(log_tau, math.log(tau) if tau > 0 else -math.inf)), log_direct
+    return float(np.logaddexp(log_tau, math.log(tau) if tau > 0 else -math.inf)), log_direct, signed
 
 
 def compose(fog, d, parts):
@@ -304,9 +376,11 @@ def compose(fog, d, parts):
         return 1.0
     if fog.density == 0:
         return 1.0
-    log_tau, log_direct = parts
-    x = math.exp(min(math.log(fog.density) + log_tau, 700.0)) - fog.density * log_direct
-    T = math.exp(-x) if math.isfinite(x) else 0.0
+    log_tau, log_direct, signed = parts
+    x = (math.exp(min(math.log(fog.density) + log_tau, 700.0)) + fog.density * signed
+         - fog.density * log_direct)
+    # the total optical depth is kept at 0 or more (a carving body removes fog, never adds light)
+    T = math.exp(-max(x, 0.0)) if math.isfinite(x) else 0.0
     return max(T, 1.0 - e.max_opacity)
 
 

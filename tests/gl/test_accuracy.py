@@ -17,7 +17,8 @@ import pytest
 from cases import draw_case
 from fogbank.kinds.reference import transmittance as reference
 from fogbank.kinds.noise_bake import bake
-from fogbank.model.params import LAYER_CLASSES, FogParams, Height
+from fogbank.model.params import LAYER_CLASSES, FogParams
+from fogbank.kinds.height import Height
 from fogbank.model.presets import preset_dict
 from quadrature import check, compose, noise_bound, truth
 

@@ -1,29 +1,145 @@
-"""The generated GLSL depends only on the layer variant key (kinds from a fixed list,
-booleans, small counts): no text a user sends can reach the shader source."""
+"""The packing and the generated GLSL, held to the registry's declarations.
+
+- Every field of every kind changes the packed GPU data (the uniform block, the particle
+  texture or the variant key that picks the program), or the kind declares it CPU-only.
+- Every kind's slots fit the per-layer budget, and a layout over it fails at import.
+- The generated GLSL depends only on the variant key: no text a user sends reaches it.
+"""
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
-from pydantic import ValidationError
+from pydantic import BaseModel, ValidationError
 
 from draws import ALL, random_layer
-from fogbank.kinds.packing import density_code, layer_code, variant
+from fogbank.kinds import KINDS
+from fogbank.kinds.kind import LAYER_VEC4, Layout, SlotError
+from fogbank.kinds.packing import density_code, layer_code, pack, variant
+from fogbank.model.fields import MAX_LAYERS
 from fogbank.model.params import FogParams
+from fogbank.scene.terrain import height
+from fogbank.kinds.particle_motion import simulate
+
+LOOK = {"time": 2.5, "wind": {"speed": 3.0, "direction": 40.0}}
+
+
+def packed(layer):
+    """Everything a layer sends to the GPU: its uniform block, the particle rows and the
+    variant key, packed relative to an eye away from the origin."""
+    fog = FogParams.model_validate({**LOOK, "layers": [layer.model_dump()]})
+    states = {0: simulate(fog.layers[0], fog.time, fog.wind.vector(), height)} \
+        if layer.kind == "particles" else {}
+    data, parts = pack(fog, states, ref=(3.0, 7.0, -2.0), time=fog.time)
+    return data, parts, variant(fog)
+
+
+def leaves(value, path=()):
+    """(path, value) of every leaf of a dumped model (numbers, booleans, strings)."""
+    if isinstance(value, dict):
+        for k, v in value.items():
+            yield from leaves(v, path + (k,))
+    elif isinstance(value, (list, tuple)):
+        for i, v in enumerate(value):
+            yield from leaves(v, path + (i,))
+    else:
+        yield path, value
+
+
+def replaced(d, path, v):
+    if not path:
+        return v
+    d = list(d) if isinstance(d, (list, tuple)) else dict(d)
+    d[path[0]] = replaced(d[path[0]], path[1:], v)
+    return d
+
+
+def candidates(v, literals):
+    if isinstance(v, bool):
+        return [not v]
+    if isinstance(v, str):
+        return [x for x in literals if x != v]
+    if isinstance(v, int):
+        return [v + 1, v - 1, v * 2, max(1, v // 2)]
+    return [v * 1.37 + 0.113, v * 0.61 - 0.07, v + 1.0, v - 1.0, 0.5 * v, v + 0.01]
+
+
+def literal_values(model) -> set:
+    out = set()
+    for f in model.model_fields.values():
+        args = getattr(f.annotation, "__args__", ())
+        if getattr(f.annotation, "__origin__", None) is not None and all(isinstance(a, str) for a in args):
+            out |= set(args)
+    return out
+
+
+@pytest.mark.parametrize("name", ALL)
+def test_every_field_reaches_the_gpu_or_is_declared_cpu_only(name):
+    kind = KINDS[name]
+    rng = np.random.default_rng(ALL.index(name))
+    literals = literal_values(kind.model)
+    reached, tried = set(), set()
+    for _ in range(6):
+        layer = random_layer(name, rng)
+        base = packed(layer)
+        dumped = layer.model_dump(mode="json")
+        for path, v in leaves(dumped):
+            top = path[0]
+            if top in ("kind", "enabled"):
+                continue
+            tried.add(top)
+            for c in candidates(v, literals):
+                try:
+                    other = kind.model.model_validate(replaced(dumped, path, c))
+                except ValidationError:
+                    continue
+                got = packed(other)
+                if got[2] != base[2] or not np.array_equal(got[0], base[0]) or not np.array_equal(got[1], base[1]):
+                    reached.add(top)
+                    break
+    missed = tried - reached - set(kind.cpu_only)
+    assert missed == set()
+    # and a field declared CPU-only really is a field
+    assert set(kind.cpu_only) <= set(kind.model.model_fields)
+
+
+def test_every_slot_fits_the_budget_and_an_overfull_layout_fails():
+    for kind in KINDS.values():
+        assert kind.layout.vec4s <= LAYER_VEC4
+    # 192 of the 256 fragment uniform vec4s GL 3.3 guarantees
+    assert MAX_LAYERS * LAYER_VEC4 <= 192
+    with pytest.raises(SlotError, match="budget"):
+        Layout("too-big", ("terms", 4, LAYER_VEC4), ("more", 1))
+    with pytest.raises(SlotError, match="size"):
+        Layout("bad", ("odd", 3, 2))
+
+
+def test_a_pack_that_misses_a_slot_fails():
+    layout = Layout("demo", ("a", 1), ("b", 3))
+    block = np.zeros((LAYER_VEC4, 4))
+    with pytest.raises(SlotError, match="slots are"):
+        layout.write(block, {"a": 1.0})
+    layout.write(block, {"a": 1.0, "b": (2.0, 3.0, 4.0)})
+    assert block[0].tolist() == [1.0, 2.0, 3.0, 4.0]
 
 
 def test_generated_glsl_comes_only_from_the_variant_key():
     rng = np.random.default_rng(3)
+    allowed = set().union(*(literal_values(k.model) for k in KINDS.values()))
     for _ in range(200):
-        fog = FogParams(layers=[random_layer(str(rng.choice(ALL)), rng) for _ in range(int(rng.integers(0, 16)))])
-        key = variant(fog)
-        for kind, terms in key:
-            assert kind in {"homogeneous", "height", "cosine", "polynomial", "potential", "sphere",
-                            "particles", "noise/surface", "noise/volume", "distance"}
-            assert type(terms) is int and 0 <= terms <= 8
-        # same key, same code, whatever the parameter values
-        assert layer_code(key) == layer_code(variant(FogParams.model_validate(fog.model_dump())))
-        assert isinstance(density_code(key), str)
+        names = [str(rng.choice(ALL)) for _ in range(int(rng.integers(0, 16)))]
+        a = FogParams(layers=[random_layer(n, rng) for n in names])
+        b = FogParams(layers=[random_layer(n, rng) for n in names])
+        for kind, v in variant(a):
+            assert kind in KINDS
+            for x in v:
+                assert (type(x) is int and 0 <= x <= 8) or x in allowed
+        if variant(a) == variant(b):   # same key, same code, whatever the values
+            assert layer_code(variant(a)) == layer_code(variant(b))
+        code = layer_code(variant(a)) + density_code(variant(a))
+        assert re.fullmatch(r"[\w\s.,;:()\[\]{}<>=+\-*/#&|!]*", code) is not None
 
 
 @pytest.mark.parametrize("patch", [

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from fogbank.scene import terrain
-from fogbank.model.params import Particles
+from fogbank.kinds.particles import Particles
 from fogbank.kinds.particle_motion import simulate, uniform
 
 WIND = np.array([2.0, 0.0, -1.0])

@@ -2,13 +2,45 @@
 
 from __future__ import annotations
 
+import math
+from typing import Literal
+
 import numpy as np
+from pydantic import Field, model_validator
 
+from fogbank.kinds.kind import Kind, Layout
 from fogbank.kinds.rays import slide
+from fogbank.kinds.reduce import EXACT_ABOVE, phase_at
+from fogbank.model.fields import LayerBase, Strict, Wave, num
+
+MAX_COSINE_TERMS = 8
+
+class CosineTerm(Strict):
+    amp: float = num(0.5, -10, 10, 0.01, "", "amplitude c_i")
+    k: tuple[Wave, Wave, Wave] = Field((0.0, 1.0, 0.0), description="wave vector, rad per function unit")
+    phase: float = num(0.0, -1000, 1000, 0.01, "rad", "phase phi_i")
 
 
-def density(layer, x, t, wind):
-    x = slide(layer, x, t, wind) / layer.scale
+class Cosine(LayerBase):
+    """Biri 3.2.1: density * (c0 + sum c_i cos(k_i . x / scale + phi_i))."""
+    kind: Literal["cosine"] = "cosine"
+    density: float = num(0.01, 0, 10, 0.0005, "1/m", "overall weight")
+    c0: float = num(1.0, 0, 100, 0.01, "", "constant term")
+    terms: list[CosineTerm] = Field(default_factory=lambda: [CosineTerm()],
+                                    max_length=MAX_COSINE_TERMS)
+    scale: float = num(20.0, 0.01, 10000, 0.5, "m", "scene metres per function unit", gt=True)
+
+    @model_validator(mode="after")
+    def _nonnegative(self) -> "Cosine":
+        s = sum(abs(t.amp) for t in self.terms)
+        if self.c0 < s:
+            raise ValueError(f"c0 = {self.c0} must be >= the sum of |amp| = {s:g} "
+                             "(Biri 3.2.1) so that the density stays >= 0")
+        return self
+
+
+def density(layer, x, t, env):
+    x = slide(layer, x, t, env.wind) / layer.scale
     s = np.full(len(x), layer.c0)
     for term in layer.terms:
         s = s + term.amp * np.cos(x @ np.asarray(term.k) + term.phase)
@@ -17,8 +49,7 @@ def density(layer, x, t, wind):
 
 def _phases(term, layer, O, t, wind):
     """Each ray's phase k . (O - wind t) / scale + phase, reduced to [-pi, pi) (exactly where
-    it is large: late times, fine waves), as layers.pack reduces it for the shader."""
-    from fogbank.kinds.packing import EXACT_ABOVE, phase_at
+    it is large: late times, fine waves), as kinds/packing.py (phase_at) reduces it for the shader."""
     w = np.asarray(wind, dtype=np.float64) if layer.wind else np.zeros(3)
     k = np.asarray(term.k, dtype=np.float64)
     x = ((O - w[None, :] * t[:, None]) @ k) / layer.scale + term.phase
@@ -29,13 +60,61 @@ def _phases(term, layer, O, t, wind):
     return A
 
 
-def optical_depth(layer, O, omega, d, t, wind):
+def optical_depth(layer, O, omega, d, t, env):
     # integral of cos(A + B s) over [0, d] = d cos(A + B d / 2) sinc(B d / 2)
     tau = layer.c0 * d
     for term in layer.terms:
         k = np.asarray(term.k, dtype=np.float64)
-        A = _phases(term, layer, O, t, wind)
+        A = _phases(term, layer, O, t, env.wind)
         B = (omega @ k) / layer.scale
         h = B * d / 2.0
         tau = tau + term.amp * d * np.cos(A + h) * np.sinc(h / np.pi)
-    return layer.density * tau
+    return env.weight * layer.density * tau
+
+
+def pack(layer, p):
+    # each term's phase at E (wind slide included), reduced to [-pi, pi) in float64
+    terms = [(*t.k, phase_at(t.k, p.ref, p.wind(layer), p.time, layer.scale, t.phase))
+             for t in layer.terms]
+    return {"density": p.density * layer.density, "c0": layer.c0, "inv_scale": 1.0 / layer.scale,
+            "terms": np.ravel(terms), "amps": [t.amp for t in layer.terms]}
+
+
+def code(r, variant):
+    (n,) = variant
+    body = [f"float acc = {r.c0} * ds;", f"vec3 Ou = Os * {r.inv_scale};", f"vec3 wu = w * {r.inv_scale};"]
+    for j in range(n):
+        body.append(f"acc += cosineTermOpticalDepth(Ou, wu, ds, {r.at('terms', j)}.xyz, "
+                    f"{r.at('terms', j)}.w, {r.at('amps', j)});")
+    body.append(f"tau += {r.density} * acc;")
+    return "{ " + " ".join(body) + " }"
+
+
+def density_code(r, variant):
+    (n,) = variant
+    t = " + ".join(f"cosineTermDensity(x * {r.inv_scale}, {r.at('terms', j)}.xyz, "
+                   f"{r.at('terms', j)}.w, {r.at('amps', j)})" for j in range(n)) or "0.0"
+    return f"rho += {r.density} * ({r.c0} + {t});"
+
+
+def sample(rng):
+    n = int(rng.integers(1, 6))
+    terms = [CosineTerm(amp=rng.uniform(-1, 1), k=tuple(rng.normal(size=3) * 3),
+                        phase=rng.uniform(-3, 3)) for _ in range(n)]
+    c0 = sum(abs(t.amp) for t in terms) + rng.uniform(0, 1)
+    return Cosine(density=rng.uniform(0, 0.03), c0=c0, terms=terms, scale=rng.uniform(2, 40),
+                  wind=bool(rng.random() < 0.5))
+
+
+KIND = Kind(
+    model=Cosine,
+    layout=Layout("cosine", ("density", 1), ("c0", 1), ("inv_scale", 1),
+                  ("terms", 4, MAX_COSINE_TERMS), ("amps", 1, MAX_COSINE_TERMS)),
+    pack=pack, code=code, density_code=density_code, sample=sample,
+    optical_depth=optical_depth, density=density,
+    variant=lambda layer: (len(layer.terms),),
+    seconds_per_mpx=0.02,
+    extra_seconds=lambda layer, fog_mpx: 0.01 * len(layer.terms) * fog_mpx,
+    describe=lambda layer: f"cosine, {len(layer.terms)} terms",
+    jit_units=lambda variant: 1.5 * variant[0],
+)

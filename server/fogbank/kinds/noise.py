@@ -2,14 +2,31 @@
 
 from __future__ import annotations
 
+from typing import Literal
+
 import numpy as np
+from pydantic import Field
 
 from fogbank.kinds import noise_bake as bake
+from fogbank.kinds.kind import Kind, Layout
 from fogbank.kinds.rays import slide
+from fogbank.model.fields import Bool, Int, LayerBase, num
 
 
-def density(layer, tex, x, t, wind):
-    return layer.density * bake.sample(tex, slide(layer, x, t, wind), layer.scale)
+class Noise(LayerBase):
+    """Perlin fog write-up: baked fractal noise n; surface T = exp(-rho d n) or volumetric."""
+    kind: Literal["noise"] = "noise"
+    mode: Literal["surface", "volume"] = "surface"
+    density: float = num(0.02, 0, 10, 0.0005, "1/m", "rho")
+    scale: float = num(60.0, 0.1, 10000, 0.5, "m", "size of one noise tile", gt=True)
+    height_falloff: Bool = Field(True, description="surface mode: n * dY^2 / 2 + 0.001 (write-up)")
+    falloff_scale: float = num(10.0, 0.01, 1000, 0.1, "m", "dY is measured in these units", gt=True)
+    samples: Int = Field(16, ge=1, le=128, description="volume mode: most samples per ray; each ray "
+                                                       "takes what its error bound needs, up to this")
+
+
+def density(layer, x, t, env):
+    return layer.density * bake.sample(env.tex, slide(layer, x, t, env.wind), layer.scale)
 
 
 NOISE_TOL = 1e-3   # kinds/noise.glsl: the volume mode's target error in optical depth
@@ -29,18 +46,62 @@ def volume_samples(layer, tex, omega, d, weight=1.0):
     return np.clip(need, 1, layer.samples)
 
 
-def optical_depth(layer, tex, O, omega, d, t, wind, weight=1.0):
+def optical_depth(layer, O, omega, d, t, env):
     if layer.mode == "volume":
         # the midpoint rule with the sample count the shader picks for each ray
-        n = volume_samples(layer, tex, omega, d, weight)
+        n = volume_samples(layer, env.tex, omega, d, env.weight)
         tau = np.zeros(len(d))
         for i in range(int(n.max(initial=1))):
             x = O + omega * (d * (i + 0.5) / n)[:, None]
-            tau += np.where(i < n, density(layer, tex, x, t, wind), 0.0)
-        return tau * d / n
+            tau += np.where(i < n, density(layer, x, t, env), 0.0)
+        return env.weight * tau * d / n
     P = O + omega * d[:, None]
-    n = bake.sample(tex, slide(layer, P, t, wind), layer.scale)
+    n = bake.sample(env.tex, slide(layer, P, t, env.wind), layer.scale)
     if layer.height_falloff:
         dy = (O[:, 1] - P[:, 1]) / layer.falloff_scale
         n = n * dy * dy / 2.0 + 0.001  # write-up: n = n dY^2 / 2 + 0.001
-    return layer.density * d * n
+    return env.weight * layer.density * d * n
+
+
+def pack(layer, p):
+    n = p.fog.noise
+    return {"density": p.density * layer.density, "inv_scale": 1.0 / layer.scale,
+            "volume": 1.0 if layer.mode == "volume" else 0.0, "samples": layer.samples,
+            "falloff": 1.0 if layer.height_falloff else 0.0,
+            "inv_falloff_scale": 1.0 / layer.falloff_scale,
+            "offset": np.mod(p.slid(layer) / layer.scale, 1.0),   # E in tiles, mod 1 (float64)
+            "steps": bake.steps(n.size, n.octaves, n.blur, n.seed)}
+
+
+def code(r, variant):
+    if variant == ("volume",):
+        return r.format("tau += noiseVolumeOpticalDepth(uNoise, Os, w, ds, {density}, {inv_scale}, "
+                        "{offset}, {steps}, int({samples}));")
+    return r.format("tau += noiseSurfaceOpticalDepth(uNoise, Os, P, ds, {density}, {inv_scale}, "
+                    "{offset}, {falloff} > 0.5, {inv_falloff_scale});")
+
+
+def sample(rng):
+    return Noise(mode=str(rng.choice(["surface", "volume"])), density=rng.uniform(0, 0.05),
+                 scale=rng.uniform(5, 100), height_falloff=bool(rng.random() < 0.5),
+                 falloff_scale=rng.uniform(2, 30), samples=int(rng.integers(1, 24)),
+                 wind=bool(rng.random() < 0.5))
+
+
+NOISE_SAMPLE_S_PER_MPX = 0.022   # volume mode, per sample along the ray
+
+
+def extra_seconds(layer, fog_mpx):
+    return NOISE_SAMPLE_S_PER_MPX * layer.samples * fog_mpx if layer.mode == "volume" else 0.0
+
+
+KIND = Kind(
+    model=Noise,
+    layout=Layout("noise", ("density", 1), ("inv_scale", 1), ("volume", 1), ("samples", 1),
+                  ("falloff", 1), ("inv_falloff_scale", 1), ("offset", 3), ("steps", 3)),
+    pack=pack, code=code, sample=sample, optical_depth=optical_depth,
+    variant=lambda layer: (layer.mode,), uses_noise=True, seconds_per_mpx=0.05,
+    extra_seconds=extra_seconds,
+    describe=lambda layer: (f"noise, volume, {layer.samples} samples" if layer.mode == "volume"
+                            else "noise"),
+)

@@ -17,8 +17,6 @@ from typing import Callable
 
 import numpy as np
 
-from fogbank.model.params import Particles
-
 _M64 = np.uint64(0xFFFFFFFFFFFFFFFF)
 
 
@@ -54,7 +52,7 @@ def _cone(axis: np.ndarray, spread_rad: float, u1, u2) -> np.ndarray:
             + (sin_t * np.sin(phi))[:, None] * b2)
 
 
-def simulate(layer: Particles, t: float, wind: np.ndarray,
+def simulate(layer, t: float, wind: np.ndarray,
              ground: Callable[[np.ndarray, np.ndarray], np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
     """Positions (M, 3) and strengths s_j = remaining life / initial life (M,) of the
     particles alive at time t. M <= count."""

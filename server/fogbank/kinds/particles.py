@@ -2,7 +2,37 @@
 
 from __future__ import annotations
 
+from typing import Literal
+
 import numpy as np
+from pydantic import Field, model_validator
+
+from fogbank.kinds.kind import Kind, Layout
+from fogbank.model.fields import MAX_PARTICLES, Direction, Int, LayerBase, Position, num
+
+
+class Particles(LayerBase):
+    """Fischer: a few free-floating particles; T = prod (1 - alpha s_j clamp(1 - dist_j/R, 0, 1))."""
+    kind: Literal["particles"] = "particles"
+    count: Int = Field(120, ge=1, le=MAX_PARTICLES, description="particles alive at once (slots)")
+    emitter: Position = Field((10.0, 2.0, 0.0), description="where particles are born, m")
+    direction: Direction = Field((0.0, 1.0, 0.0), description="mean launch direction")
+    spread: float = num(25.0, 0, 180, 1, "deg", "cone half-angle around direction")
+    speed: float = num(1.5, 0, 50, 0.1, "m/s", "launch speed")
+    life_min: Int = Field(64, ge=1, le=1000, description="shortest life, steps")
+    life_max: Int = Field(128, ge=1, le=1000, description="longest life, steps")
+    step: float = num(0.1, 0.005, 10, 0.005, "s", "simulation step", gt=True)
+    radius: float = num(4.0, 0.01, 100, 0.1, "m", "R_j", gt=True)
+    alpha: float = num(0.2, 0, 1, 0.01, "", "max opacity of one particle (0.2 fog, ~1 smoke)")
+    gravity: float = num(0.0, -20, 20, 0.1, "m/s^2", "upward acceleration (negative falls)")
+    drag: float = num(0.5, 0, 10, 0.05, "1/s", "relaxation of velocity toward the wind")
+    seed: Int = Field(1, ge=0, le=2**31 - 1, description="random seed")
+
+    @model_validator(mode="after")
+    def _life(self) -> "Particles":
+        if self.life_min > self.life_max:
+            raise ValueError(f"life_min = {self.life_min} must be <= life_max = {self.life_max}")
+        return self
 
 
 def segment_distance(p, O, omega, d):
@@ -14,7 +44,7 @@ def segment_distance(p, O, omega, d):
     return np.linalg.norm(closest, axis=2)
 
 
-def log_transmittance(layer, state, O, omega, d):
+def log_transmittance_of(layer, state, O, omega, d):
     """log T, summed over particles as logarithms (a product of many clarities underflows
     float64: 900 of 0.25 is 1e-538), -inf where a particle is opaque."""
     pos, strength = state
@@ -27,4 +57,58 @@ def log_transmittance(layer, state, O, omega, d):
 
 
 def transmittance(layer, state, O, omega, d):
-    return np.exp(log_transmittance(layer, state, O, omega, d))
+    return np.exp(log_transmittance_of(layer, state, O, omega, d))
+
+
+def pack(layer, p):
+    # the particles' positions relative to E go to the particle texture, from this
+    # layer's first row; the block says where they are
+    pos, strength = p.states[p.index]
+    first, count = p.first_particle, len(pos)
+    p.particles[first:first + count, :3] = pos - p.ref
+    p.particles[first:first + count, 3] = strength
+    p.first_particle += count
+    return {"alpha": layer.alpha, "radius": layer.radius, "first": first, "count": count}
+
+
+def code(r, variant):
+    # one particle per texel of uParticles; the fog pass leaves this to the quads pass
+    return (f"for (int j = 0; j < int({r.count}); ++j) {{ "
+            f"vec4 q = texelFetch(uParticles, ivec2(int({r.first}) + j, 0), 0); "
+            f"tau += directDepth(particleOpacity(Os, w, ds, q.xyz, {r.radius}, q.w, {r.alpha}), "
+            f"uDensity); }}")
+
+
+def reference(layer, O, omega, d, t, env):
+    return log_transmittance_of(layer, env.state, O, omega, d)
+
+
+def sample(rng):
+    return Particles(count=int(rng.integers(1, 200)), emitter=tuple(rng.normal(size=3) * 5),
+                     direction=tuple(rng.normal(size=3)), spread=rng.uniform(0, 90),
+                     speed=rng.uniform(0, 3), radius=rng.uniform(1, 8), alpha=rng.uniform(0, 1),
+                     life_min=8, life_max=int(rng.integers(8, 64)), step=rng.uniform(0.05, 0.5),
+                     seed=int(rng.integers(0, 1000)), wind=bool(rng.random() < 0.5))
+
+
+PARTICLE_S_PER_MPX = 0.0011      # one particle quad of radius 20 m, per megapixel
+PARTICLE_SIM_S = 0.5             # simulating 1024 particles of life 128 steps, once per time
+
+
+def sim_seconds(layer) -> float:
+    return PARTICLE_SIM_S * layer.count / 1024 * layer.life_max / 128
+
+
+def extra_seconds(layer, fog_mpx):
+    cover = min(max((layer.radius / 20.0) ** 2, 0.05), 16.0)
+    return PARTICLE_S_PER_MPX * layer.count * cover * fog_mpx + sim_seconds(layer)
+
+
+KIND = Kind(
+    model=Particles,
+    layout=Layout("particles", ("alpha", 1), ("radius", 1), ("first", 1), ("count", 1)),
+    pack=pack, code=code, sample=sample, log_transmittance=reference,
+    quads=True, seconds_per_mpx=0.0, extra_seconds=extra_seconds,
+    describe=lambda layer: f"particles, {layer.count} of radius {layer.radius:g} m",
+    jit_units=lambda variant: 0.0,
+)

@@ -36,7 +36,7 @@ float polyTiled(float u, float C, bool repeatMode, vec4 c0, vec4 c1) {
 // ray far outside the fog's slab). The ray's own u - u0 = a . O + a . w s is taken here.
 // A ray within one tile (the usual case, and the one where P can cancel: a short ray near
 // a root of a P with large coefficients) is integrated in P re-expanded about
-// e = u0 + ex.x (the coefficients p0, p1 = c'_i / (i+1), shifted in float64 by layers.py;
+// e = u0 + ex.x (the coefficients p0, p1 = c'_i / (i+1), shifted in float64 by kinds/polynomial.py;
 // e = u0 in repeat mode, and e = u0 clamped into [-C, C] in zero mode, passed as ex.y), so
 // its terms are small where the ray is. Rays across tiles use the expansion about 0.
 float polynomialOpticalDepth(vec3 O, vec3 w, float d, vec3 a, float u0, float C, bool repeatMode,

@@ -2,10 +2,55 @@
 
 from __future__ import annotations
 
+import math
+from typing import Literal
+
 import numpy as np
 from numpy.polynomial import polynomial as npoly
+from pydantic import Field, model_validator
 
+from fogbank.kinds.kind import Kind, Layout, exponential
 from fogbank.kinds.rays import slide
+from fogbank.kinds.reduce import EXACT_ABOVE, coordinate_at, taylor_shift
+from fogbank.model.fields import LayerBase, Num, Wave, num
+
+MAX_POLY_COEFFS = 8
+
+def poly_min(coeffs: list[float], lo: float, hi: float) -> float:
+    """Minimum of sum coeffs[i] u^i on [lo, hi] (endpoints and real critical points)."""
+    c = np.asarray(coeffs, dtype=np.float64)
+    cands = [lo, hi]
+    if len(c) > 2:
+        d = np.polynomial.polynomial.polyder(c)
+        if np.any(d != 0):
+            for r in np.polynomial.polynomial.polyroots(np.trim_zeros(d, "b")):
+                if abs(r.imag) < 1e-9 and lo <= r.real <= hi:
+                    cands.append(float(r.real))
+    return float(min(np.polynomial.polynomial.polyval(cands, c)))
+
+
+class Polynomial(LayerBase):
+    """Biri 3.2.2: density * P(u), u = axis . x + offset, on [-C, C], tiled or zero outside."""
+    kind: Literal["polynomial"] = "polynomial"
+    density: float = num(0.02, 0, 10, 0.0005, "1/m", "weight c_i")
+    coeffs: list[Num] = Field([0.8, -1.0, 0.0, 0.0, 1.0], min_length=1,
+                                max_length=MAX_POLY_COEFFS,
+                                description="P(u) = sum coeffs[i] u^i (ascending powers)")
+    axis: tuple[Wave, Wave, Wave] = Field((1.0 / 60.0, 0.0, 0.0), description="u = axis . x + offset, 1/m")
+    offset: float = num(0.0, -1000, 1000, 0.01, "", "added to u")
+    half_width: float = num(1.0, 1e-3, 1000, 0.01, "", "C: P is defined on [-C, C]", gt=True)
+    mode: Literal["repeat", "zero"] = Field("repeat", description="outside [-C, C]: tile or zero")
+
+    @model_validator(mode="after")
+    def _nonnegative(self) -> "Polynomial":
+        for i, c in enumerate(self.coeffs):
+            if not math.isfinite(c) or abs(c) > 1e6:
+                raise ValueError(f"coeffs[{i}] must be finite with |c| <= 1e6")
+        m = poly_min(self.coeffs, -self.half_width, self.half_width)
+        if m < -1e-9:
+            raise ValueError(f"P(u) reaches {m:.4g} < 0 on [-C, C] = [-{self.half_width:g}, "
+                             f"{self.half_width:g}]; a density must be >= 0 (Biri 3.2.2)")
+        return self
 
 
 def _tiled(layer, u):
@@ -18,8 +63,8 @@ def _tiled(layer, u):
     return u, np.zeros_like(u), inside
 
 
-def density(layer, x, t, wind):
-    u = slide(layer, x, t, wind) @ np.asarray(layer.axis) + layer.offset
+def density(layer, x, t, env):
+    u = slide(layer, x, t, env.wind) @ np.asarray(layer.axis) + layer.offset
     r, _, inside = _tiled(layer, u)
     return layer.density * np.where(inside, npoly.polyval(r, layer.coeffs), 0.0)
 
@@ -38,16 +83,14 @@ def mean(layer, u0, u1):
     return acc
 
 
-def optical_depth(layer, O, omega, d, t, wind):
+def optical_depth(layer, O, omega, d, t, env):
     # as kinds/polynomial.glsl: the ray's u-interval [lo, hi] integrated tile by
     # tile (the partial tile at each end, whole tiles between), each piece its length
     # times P's mean over it; tau = density d * integral / (hi - lo), or d P(u) if flat.
-    from fogbank.kinds.packing import coordinate_at
     a = np.asarray(layer.axis, dtype=np.float64)
     C = layer.half_width
     repeat = layer.mode == "repeat"
-    w = np.asarray(wind, dtype=np.float64) if layer.wind else np.zeros(3)
-    from fogbank.kinds.packing import EXACT_ABOVE
+    w = np.asarray(env.wind, dtype=np.float64) if layer.wind else np.zeros(3)
     x = (O - w[None, :] * t[:, None]) @ a + layer.offset
     big = (np.abs(O) + np.abs(w)[None, :] * t[:, None]) @ np.abs(a) + abs(layer.offset)
     u0 = x - 2 * C * np.floor((x + C) / (2 * C)) if repeat else x
@@ -63,7 +106,7 @@ def optical_depth(layer, O, omega, d, t, wind):
         inside = right >= left
         frac = np.where(flat, 1.0, np.clip(right - left, 0.0, None) / safe)
         m = mean(layer, np.where(inside, left, 0.0), np.where(inside, right, 0.0))
-        return layer.density * d * np.where(inside, frac * m, 0.0)
+        return env.weight * layer.density * d * np.where(inside, frac * m, 0.0)
     n0, n1 = np.floor((lo + C) / (2 * C)), np.floor((hi + C) / (2 * C))
     r0 = np.clip(lo - 2 * C * n0, -C, C)
     r1 = np.clip(hi - 2 * C * n1, -C, C)
@@ -72,4 +115,52 @@ def optical_depth(layer, O, omega, d, t, wind):
     one = mean(layer, r0, r1)
     whole = ((C - r0) * mean(layer, r0, np.full_like(r0, C)) + (n1 - n0 - 1) * period
              + (r1 + C) * mean(layer, np.full_like(r1, -C), r1)) / safe
-    return layer.density * d * np.where(n0 == n1, one, whole)
+    return env.weight * layer.density * d * np.where(n0 == n1, one, whole)
+
+
+def pack(layer, p):
+    C = layer.half_width
+    c = np.zeros(MAX_POLY_COEFFS)
+    c[:len(layer.coeffs)] = layer.coeffs
+    Q = npoly.polyint(c)  # Q[0] = 0, Q[i+1] = c_i / (i + 1)
+    period = npoly.polyval(C, Q) - npoly.polyval(-C, Q)
+    repeat = layer.mode == "repeat"
+    u0 = coordinate_at(layer.axis, p.ref, p.wind(layer), p.time, layer.offset,
+                       2 * C if repeat else None, C)
+    # P about the point where the reference is (kept inside [-C, C] in zero mode), so a
+    # short ray near a root does not cancel large terms (polynomial.glsl)
+    e = min(max(u0, -C), C)
+    n = np.arange(1, MAX_POLY_COEFFS + 1)
+    return {"axis": layer.axis, "u0": u0, "density": p.density * layer.density, "C": C,
+            "repeat": 1.0 if repeat else 0.0, "period": period, "coeffs": c,
+            "integral": Q[1:], "shifted": taylor_shift(c, e) / n, "shift": (e - u0, e)}
+
+
+def sample(rng):
+    C = rng.uniform(0.3, 2)
+    while True:
+        coeffs = list(rng.normal(size=int(rng.integers(1, 7))))
+        lo = poly_min(coeffs, -C, C)
+        if lo < 0:
+            coeffs[0] -= lo - rng.uniform(0, 0.5)
+        if poly_min(coeffs, -C, C) >= 0:
+            break
+    return Polynomial(density=rng.uniform(0, 0.03), coeffs=coeffs, half_width=C,
+                      axis=tuple(rng.normal(size=3) / 15), offset=rng.uniform(-2, 2),
+                      mode=str(rng.choice(["repeat", "zero"])), wind=bool(rng.random() < 0.5))
+
+
+KIND = Kind(
+    model=Polynomial,
+    layout=Layout("polynomial", ("axis", 3), ("u0", 1), ("density", 1), ("C", 1), ("repeat", 1),
+                  ("period", 1), ("coeffs", 1, MAX_POLY_COEFFS), ("integral", 1, MAX_POLY_COEFFS),
+                  ("shifted", 1, MAX_POLY_COEFFS), ("shift", 2)),
+    pack=pack,
+    code=lambda r, v: f"tau += {r.density} * polynomialOpticalDepth(Os, w, ds, {r.axis}, {r.u0}, "
+                      f"{r.C}, {r.repeat} > 0.5, {r.period}, {r.group('integral', 0)}, "
+                      f"{r.group('integral', 1)}, {r.group('shifted', 0)}, {r.group('shifted', 1)}, "
+                      f"{r.shift});",
+    density_code=lambda r, v: f"rho += {r.density} * polynomialDensity(x, {r.axis}, {r.u0}, {r.C}, "
+                              f"{r.repeat} > 0.5, {r.group('coeffs', 0)}, {r.group('coeffs', 1)});",
+    sample=sample, optical_depth=optical_depth, density=density,
+)

@@ -19,9 +19,10 @@ from fogbank.scene import terrain
 import time
 from collections import OrderedDict
 
-from fogbank.kinds.packing import DEFINES, LAYER_VEC4, density_code, direct_density, layer_code, pack, uses_noise, variant
+from fogbank.kinds.kind import LAYER_VEC4
+from fogbank.kinds.packing import DEFINES, direct_density, enabled, generated, pack, uses_noise, variant
 from fogbank.kinds.noise_bake import bake
-from fogbank.model.params import MAX_PARTICLES, FogParams, Particles, StillParams, srgb_to_linear
+from fogbank.model.params import MAX_PARTICLES, FogParams, StillParams, srgb_to_linear
 from fogbank.kinds.particle_motion import simulate
 from fogbank.render.glsl import program
 from fogbank.render.cache import ByteLRU
@@ -156,9 +157,8 @@ class Renderer:
         if key in self._programs:
             self._programs.move_to_end(key)
             return self._programs[key]
-        generated = {"fog/layers.gen.glsl": layer_code(layers, inline_particles),
-                     "fog/density.gen.glsl": density_code(layers)} if layers is not None else None
-        prog = program(self.ctx, vert, frag, {**DEFINES, **defines}, generated)
+        gen = generated(layers, inline_particles) if layers is not None else None
+        prog = program(self.ctx, vert, frag, {**DEFINES, **defines}, gen)
         for name, unit in TEX.items():
             _set(prog, name, unit)
         if vert == "passes/fullscreen.vert":
@@ -384,7 +384,7 @@ class Renderer:
         """The fog's uniforms for one draw, its layers packed relative to the reference
         point `ref` (float64: the eye, or a group of rays' origin) at `time`."""
         states = {i: self._particle_state(l, time, fog)
-                  for i, l in enumerate(fog.layers) if isinstance(l, Particles) and l.enabled}
+                  for i, l in enabled(fog) if l.kind == "particles"}
         data, parts = pack(fog, states, ref, time)
         self._packed = (data, parts)
         if "uLayer" in prog:   # constant indexing lets the compiler trim the array
@@ -400,7 +400,7 @@ class Renderer:
         _set(prog, "uMaxOpacity", e.max_opacity)
         _set(prog, "uDensity", direct_density(fog))
 
-    def _particle_state(self, layer: Particles, time: float, fog: FogParams):
+    def _particle_state(self, layer, time: float, fog: FogParams):
         """A particle layer's state at `time`, simulated once per distinct (layer, time,
         wind, scene) and kept in a small LRU (rays at one time, frames of a paused look)."""
         key = (layer.model_dump_json(), float(time), tuple(fog.wind.vector()), fog.scene)
@@ -418,8 +418,7 @@ class Renderer:
         """Multiply each particle's clarity into the fog target (bound), one instanced
         quad per particle over the screen bounds of its sphere of influence. The particle
         texture was filled by _set_fog_uniforms for this frame."""
-        layers = [(i, l) for i, l in enumerate(l for l in fog.layers if l.enabled)
-                  if isinstance(l, Particles)]
+        layers = [(n, l) for n, (_, l) in enumerate(enabled(fog)) if l.kind == "particles"]
         if not layers:
             return
         data, _ = self._packed

@@ -22,7 +22,8 @@ import numpy as np
 from fogbank.model import presets as P
 from fogbank.tools.child import ChildServer
 from fogbank.render.encode import encode
-from fogbank.model.params import FogParams, Homogeneous, StillParams
+from fogbank.model.params import FogParams, StillParams
+from fogbank.kinds.homogeneous import Homogeneous
 from fogbank.render.renderer import Renderer, create_context
 
 TOL = 1.0 / 255.0

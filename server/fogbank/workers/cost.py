@@ -12,8 +12,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from fogbank.kinds.packing import uses_noise, variant
-from fogbank.model.params import Cosine, FogParams, Noise, Particles, StillParams
+from fogbank.kinds import KINDS
+from fogbank.kinds.packing import enabled, uses_noise, variant
+from fogbank.kinds.particles import sim_seconds as particle_sim_seconds
+from fogbank.model.params import FogParams, StillParams
 from fogbank.render.renderer import GBUFFER_BPP, LINEAR_BPP, MSAA_BPP, OUT_BPP
 
 # seconds on the reference machine
@@ -23,14 +25,8 @@ SCENE_PREVIEW_S_PER_MPX = 0.12
 COMPOSITE_S_PER_MPX = 0.05
 BLUR_S_PER_MPX = 0.20
 ENCODE_S_PER_MPX = {"jpg": 0.01, "png": 0.04, "webp": 0.08}
-# fog pass, per layer, per megapixel of fog target
-LAYER_S_PER_MPX = {"homogeneous": 0.03, "height": 0.03, "cosine": 0.02, "polynomial": 0.04,
-                   "potential": 0.04, "sphere": 0.04, "distance": 0.05, "noise": 0.05,
-                   "particles": 0.0}
-COSINE_TERM_S_PER_MPX = 0.01
-NOISE_SAMPLE_S_PER_MPX = 0.022   # volume mode, per sample along the ray
-PARTICLE_S_PER_MPX = 0.0011      # one particle quad of radius 20 m, per megapixel
-PARTICLE_SIM_S = 0.5             # simulating 1024 particles of life 128 steps, once per time
+# the fog pass's cost per layer comes from each kind (kinds/<name>.py: seconds_per_mpx,
+# extra_seconds), per megapixel of fog target
 # llvmpipe compiles a fog program to machine code at its first draw, and that time grows
 # faster than the program: ~0.3 s for 11 height layers, 1.8 s for 16 cosine terms, 5.8 s
 # for 32, and for volume noise it doubles with each layer past about 10 (1.9 s for 12,
@@ -38,7 +34,6 @@ PARTICLE_SIM_S = 0.5             # simulating 1024 particles of life 128 steps, 
 # first draw minus second); charged only when the worker has not drawn that program yet.
 JIT_S_PER_UNIT = 0.03
 JIT_EXPONENT = 1.3
-JIT_COSINE_TERM_UNITS = 1.5
 JIT_NOISE_VOLUME_S = 0.95        # times 2 ** (volume noise layers - 11)
 
 
@@ -53,15 +48,8 @@ class Cost:
 
 
 def _layer_seconds(layer, fog_mpx: float) -> float:
-    s = LAYER_S_PER_MPX[layer.kind] * fog_mpx
-    if isinstance(layer, Cosine):
-        s += COSINE_TERM_S_PER_MPX * len(layer.terms) * fog_mpx
-    elif isinstance(layer, Noise) and layer.mode == "volume":
-        s += NOISE_SAMPLE_S_PER_MPX * layer.samples * fog_mpx
-    elif isinstance(layer, Particles):
-        cover = min(max((layer.radius / 20.0) ** 2, 0.05), 16.0)
-        s += PARTICLE_S_PER_MPX * layer.count * cover * fog_mpx + particle_sim_seconds(layer)
-    return s
+    kind = KINDS[layer.kind]
+    return kind.seconds_per_mpx * fog_mpx + kind.extra_seconds(layer, fog_mpx)
 
 
 def program_key(still: StillParams) -> tuple:
@@ -72,21 +60,12 @@ def program_key(still: StillParams) -> tuple:
 
 def jit_seconds(variant: tuple) -> float:
     """Estimated first-draw compile time of the fog program for a layers.variant() key."""
-    units = 0.0
-    volume = 0
-    for kind, terms in variant:
-        if kind == "particles":
-            continue
-        units += JIT_COSINE_TERM_UNITS * terms if kind == "cosine" else 1.0
-        volume += kind == "noise/volume"
+    units = sum(KINDS[name].jit_units(v) for name, v in variant)
+    volume = sum(1 for name, v in variant if (name, v) == ("noise", ("volume",)))
     s = JIT_S_PER_UNIT * units ** JIT_EXPONENT
     if volume > 8:
         s += JIT_NOISE_VOLUME_S * 2.0 ** (volume - 11)
     return s
-
-
-def particle_sim_seconds(layer: Particles) -> float:
-    return PARTICLE_SIM_S * layer.count / 1024 * layer.life_max / 128
 
 
 def estimate(still: StillParams, msaa: bool = True, fmt: str = "jpg", scale: float = 1.0,
@@ -105,7 +84,7 @@ def estimate(still: StillParams, msaa: bool = True, fmt: str = "jpg", scale: flo
         parts["effects.blur"] = BLUR_S_PER_MPX * mpx
     for i, layer in enumerate(still.layers):
         if layer.enabled:
-            parts[f"layers[{i}] ({_describe(layer)})"] = _layer_seconds(layer, fog_mpx)
+            parts[f"layers[{i}] ({KINDS[layer.kind].describe(layer)})"] = _layer_seconds(layer, fog_mpx)
     n = still.noise
     if uses_noise(still) and (n.size, n.octaves, n.blur, n.seed) != DEFAULT_BAKE:
         parts[f"noise.size = {n.size} (baking the noise tile, once per worker)"] = bake_seconds(n)
@@ -130,23 +109,14 @@ def bake_seconds(n) -> float:
     return BAKE_S_PER_VOXEL_OCTAVE * n.size ** 3 * n.octaves
 
 
-def _describe(layer) -> str:
-    if isinstance(layer, Noise) and layer.mode == "volume":
-        return f"noise, volume, {layer.samples} samples"
-    if isinstance(layer, Particles):
-        return f"particles, {layer.count} of radius {layer.radius:g} m"
-    if isinstance(layer, Cosine):
-        return f"cosine, {len(layer.terms)} terms"
-    return layer.kind
-
-
 def transmittance_seconds(fog: FogParams, rays: int, distinct_times: int, scale: float = 1.0,
                           groups: int = 1) -> Cost:
     """Rays cost little; each distinct time simulates every particle layer once; each
     group of rays sharing an origin and a time is one draw, its layers packed relative
     to that origin (measured on llvmpipe: ~40 us + ~28 us per layer + 0.15 us per particle)."""
-    sim = sum(particle_sim_seconds(l) for l in fog.layers if isinstance(l, Particles) and l.enabled)
-    particles = sum(l.count for l in fog.layers if isinstance(l, Particles) and l.enabled)
+    swarms = [l for _, l in enabled(fog) if l.kind == "particles"]
+    sim = sum(particle_sim_seconds(l) for l in swarms)
+    particles = sum(l.count for l in swarms)
     parts = {"rays": 2e-6 * rays * max(1, len(fog.layers)),
              "distinct ray times x particle simulation": distinct_times * sim,
              "distinct ray origins x packing": groups * (40e-6 + 28e-6 * len(fog.layers)
