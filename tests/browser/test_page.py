@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import base64
 import io
+import json
+import re
 import time
 import urllib.request
 from pathlib import Path
@@ -27,7 +29,7 @@ def server():
     s.stop()
 
 
-def new_page(browser, url, w=1280, h=720, bypass_csp=True):
+def new_page(browser, url, w=1280, h=720, bypass_csp=True, before=None):
     # Playwright's wait_for_function evaluates strings, which the page's CSP forbids (no
     # 'unsafe-eval'); test_page_runs_under_its_csp checks the page with the CSP enforced
     ctx = browser.new_context(viewport={"width": w, "height": h}, bypass_csp=bypass_csp)
@@ -35,6 +37,8 @@ def new_page(browser, url, w=1280, h=720, bypass_csp=True):
     page = ctx.new_page()
     errors = []
     page.on("pageerror", lambda e: errors.append(str(e)))
+    if before:
+        before(page)   # e.g. listeners that must see the page from its first message
     page.goto(url)
     page.errors = errors
     return page
@@ -52,6 +56,21 @@ def wait_full_frame_of_current_version(page, timeout=60000):
         " return c.dataset.full === 'true' && Number(c.dataset.version) >= window.fogbank.version; })()",
         timeout=timeout)
     time.sleep(0.3)   # let the canvas draw finish
+
+
+def wait_quiet(page, quiet_s=1.0, timeout=60):
+    """Until no frame has arrived for `quiet_s` and no patch waits to be sent."""
+    deadline = time.monotonic() + timeout
+    last, since = None, time.monotonic()
+    while time.monotonic() < deadline:
+        now = page.evaluate("(() => { const s = window.fogbank.store.get();"
+                            " return [s.frames, !!(s.pendingParams || s.pendingCamera || s.flushQueued)]; })()")
+        if now != last:
+            last, since = now, time.monotonic()
+        elif not now[1] and time.monotonic() - since >= quiet_s:
+            return
+        time.sleep(0.1)
+    raise AssertionError("the stream did not go quiet")
 
 
 def canvas_pixels(page) -> np.ndarray:
@@ -220,3 +239,159 @@ def test_a_quiet_page_is_closed_by_the_server_says_why_and_resumes_on_input(brow
         page.context.close()
     finally:
         srv.stop()
+
+
+# Two JPEG frames made in the page (an older red one, then a newer blue one) handed to the
+# stream as if they came over the socket, with the older one's decode held back until the
+# newer one is drawn: the canvas must end up blue, the stale bitmap closed, not drawn.
+OUT_OF_ORDER_DECODES = """async () => {
+  const stream = window.fogbank.stream;
+  async function frame(color, time) {
+    const c = new OffscreenCanvas(64, 36);
+    const g = c.getContext("2d");
+    g.fillStyle = color;
+    g.fillRect(0, 0, 64, 36);
+    const jpeg = new Uint8Array(await (await c.convertToBlob({ type: "image/jpeg", quality: 0.95 })).arrayBuffer());
+    const buf = new ArrayBuffer(36 + jpeg.length);
+    const v = new DataView(buf);
+    [..."FBK1"].forEach((ch, i) => v.setUint8(i, ch.charCodeAt(0)));
+    v.setUint32(4, 0, true);                        // frame id 0: its ack changes nothing
+    v.setUint32(8, window.fogbank.version, true);
+    v.setFloat64(12, time, true);
+    v.setUint16(28, 64, true);
+    v.setUint16(30, 36, true);
+    v.setUint8(32, 95);
+    v.setUint8(33, 1);
+    new Uint8Array(buf, 36).set(jpeg);
+    return buf;
+  }
+  const older = await frame("#ff0000", 1), newer = await frame("#0000ff", 2);
+  const real = stream.decode, bitmaps = [];
+  let release;
+  const held = new Promise((r) => { release = r; });
+  let calls = 0;
+  stream.decode = async (blob) => {
+    const n = calls++;
+    const bitmap = await real(blob);
+    bitmaps[n] = bitmap;
+    if (n === 0) await held;   // the older frame's decode ends last
+    return bitmap;
+  };
+  const drawnBefore = window.fogbank.store.get().frames;
+  try {
+    const first = stream.onMessage({ data: older });
+    const second = stream.onMessage({ data: newer });
+    await second;
+    release();
+    await first;
+  } finally {
+    stream.decode = real;
+  }
+  return { closed: bitmaps.map((b) => b.width === 0), drawn: window.fogbank.store.get().frames - drawnBefore,
+           time: window.fogbank.store.get().lastFrame.time,
+           shown: document.getElementById("time-out").textContent };
+}"""
+
+
+def test_a_frame_decoded_late_never_draws_over_a_newer_one(server, browser):
+    page = new_page(browser, server.url + "/?v=1&time=3&play=0")
+    wait_frames(page, 1)
+    wait_full_frame_of_current_version(page)
+    wait_quiet(page)   # paused and settled: the server sends nothing more
+    out = page.evaluate(OUT_OF_ORDER_DECODES)
+    px = canvas_pixels(page)
+    assert px.shape[:2] == (36, 64)
+    red, blue = px[..., 0].mean(), px[..., 2].mean()
+    assert blue > 200 and red < 60, (red, blue)           # the newer frame is on the canvas
+    assert out["closed"] == [True, True]                  # the stale bitmap was closed too
+    assert out["drawn"] == 1 and out["time"] == 2 and out["shown"] == "2.0 s"
+    assert page.errors == []
+    page.context.close()
+
+
+PANEL = """[...document.querySelectorAll('#controls [data-path]')].map((e) =>
+  [e.dataset.path, e.type, e.type === 'checkbox' ? e.checked : e.value])"""
+
+
+def _at(params, path):
+    v = params
+    for key in path.split("."):
+        v = v[int(key)] if isinstance(v, list) else v[key]
+    return v
+
+
+def _shown(kind, v):
+    """What a control of this input type shows for the value `v` (as the panel writes it)."""
+    if kind == "checkbox":
+        return bool(v)
+    if v is None:
+        return None
+    if kind == "text" and isinstance(v, list):
+        return [float(x) for x in v]
+    if isinstance(v, (int, float)) and not isinstance(v, bool):
+        return float(v)
+    return str(v).lower()
+
+
+def _read(kind, raw):
+    if kind == "checkbox":
+        return raw
+    if raw == "":
+        return None
+    if kind == "text":
+        return [float(x) for x in re.split(r"[,\s]+", raw) if x]
+    try:
+        return float(raw)
+    except ValueError:
+        return raw.lower()
+
+
+def test_the_store_is_the_one_source_of_the_pages_state(server, browser):
+    received = []
+
+    def listen(page):
+        page.on("websocket", lambda ws: ws.on(
+            "framereceived", lambda m: received.append(json.loads(m)) if isinstance(m, str) else None))
+
+    page = new_page(browser, server.url + "/?v=1&time=3", before=listen)
+    wait_frames(page, 1)
+    # a preset switch
+    page.select_option("#preset", "quilez-spheres")
+    page.wait_for_function("window.fogbank.store.get().confirmed.params.layers.length === 3"
+                           " && document.getElementById('preset').value === 'quilez-spheres'")
+    page.wait_for_selector("[data-path='layers.2.radius']", state="attached")
+    # a typed edit
+    page.locator("[data-path='density']").fill("2.5")
+    page.locator("[data-path='density']").press("Enter")
+    page.wait_for_function("window.fogbank.store.get().confirmed.params.density === 2.5")
+    # a pause
+    page.locator("#play").click()
+    page.wait_for_function("window.fogbank.store.get().confirmed.playing === false")
+    wait_full_frame_of_current_version(page)
+    wait_quiet(page)
+
+    state = page.evaluate("window.fogbank.store.get()")
+    last = [m for m in received if m["type"] == "state"][-1]
+    confirmed = {k: v for k, v in last.items() if k != "type"}
+    # what the server last confirmed
+    assert state["confirmed"] == confirmed
+    assert state["params"] == confirmed["params"]
+    assert page.evaluate("window.fogbank.params") == state["params"]
+    assert page.evaluate("window.fogbank.version") == confirmed["version"]
+    assert state["params"]["density"] == 2.5 and len(state["params"]["layers"]) == 3
+    # what the panel and the toolbar show
+    panel = page.evaluate(PANEL)
+    assert len(panel) > 20
+    shown = {path: _read(kind, raw) for path, kind, raw in panel}
+    expected = {path: _shown(kind, _at(state["params"], path)) for path, kind, _ in panel}
+    assert shown == expected
+    assert page.locator("#play").inner_text() == "Play" and state["confirmed"]["playing"] is False
+    assert page.locator("#preset").input_value() == ""     # the typed edit made it a custom look
+    assert page.evaluate("location.search.slice(1)") == confirmed["query"]
+    # nothing else writes the state: it is frozen, and app.js keeps no module-level variables
+    assert page.evaluate("Object.isFrozen(window.fogbank.store.get())")
+    with urllib.request.urlopen(server.url + "/static/app.js") as r:
+        app = r.read().decode()
+    assert re.findall(r"^(?:let|var)\s+\w+", app, re.M) == []
+    assert page.errors == []
+    page.context.close()

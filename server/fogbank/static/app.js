@@ -1,9 +1,12 @@
 // fogbank's live page: wires the stream, the schema-built controls, camera input, the
-// toolbar and the URL (which follows the look through history.replaceState).
+// toolbar and the URL (which follows the look through history.replaceState). All of the
+// page's state is in one store (store.js): handlers read it with store.get() and write it
+// with store.set()/update(); the toolbar, the time slider and the canvas's data-* follow it.
 
 import { Stream } from "./stream.js";
 import { Controls, buildPatch } from "./controls.js";
 import { CameraInput } from "./camera.js";
+import { store, version, playing, simTime } from "./store.js";
 
 const $ = (id) => document.getElementById(id);
 const canvas = $("view");
@@ -13,22 +16,15 @@ const [schema, presets] = await Promise.all([
   fetch("/api/presets").then((r) => r.json()),
 ]);
 
-let params = null;            // the look as the server last confirmed it (plus local camera moves)
-let version = 0;
-let playing = true;
-let redrawNext = true;        // redraw the form when the next state arrives
-let interacting = false;
-let scrubbing = false;
-let simTime = 0;
-
 // ------------------------------------------------------------------ stream
 const stream = new Stream(canvas, () => location.search.slice(1));
-window.fogbank = { stream, get params() { return params; }, get version() { return version; } };
+window.fogbank = {
+  stream, store,
+  get params() { return store.get().params; },
+  get version() { return version(store.get()); },
+};
 
 // Patches are merged and sent at most once per animation frame.
-let pendingParams = null;
-let pendingCamera = null;
-let flushQueued = false;
 function merge(a, b) {
   if (a && b && typeof a === "object" && typeof b === "object" && !Array.isArray(a) && !Array.isArray(b)) {
     const out = { ...a };
@@ -38,77 +34,70 @@ function merge(a, b) {
   return b;
 }
 function queueFlush() {
-  if (flushQueued) return;
-  flushQueued = true;
+  if (store.get().flushQueued) return;
+  store.set({ flushQueued: true });
   requestAnimationFrame(() => {
-    flushQueued = false;
+    const { pendingParams, pendingCamera } = store.get();
+    store.set({ flushQueued: false, pendingParams: null, pendingCamera: null });
     if (pendingParams) stream.send({ type: "params", params: pendingParams });
     if (pendingCamera) stream.send({ type: "camera", camera: pendingCamera });
-    pendingParams = pendingCamera = null;
   });
 }
 
 function setInteract(active) {
-  if (active === interacting) return;
-  interacting = active;
+  if (active === store.get().interacting) return;
+  store.set({ interacting: active });
   stream.send({ type: "interact", active });
 }
 
 // ------------------------------------------------------------------ controls
 const controls = new Controls($("controls"), schema, (path, value) => {
-  const patch = buildPatch(params, path, value);
   // a list added to, removed from or reordered, or a layer toggled, changes the form
   const structural = (Array.isArray(value) && (value.length === 0 || typeof value[0] === "object"))
     || path.at(-1) === "enabled";
-  if (structural) redrawNext = true;
-  params = merge(params, patch);
-  pendingParams = merge(pendingParams || {}, patch);
+  store.update((s) => {
+    const patch = buildPatch(s.params, path, value);
+    return {
+      params: merge(s.params, patch),
+      pendingParams: merge(s.pendingParams || {}, patch),
+      ...(structural ? { redrawNext: true } : {}),
+    };
+  });
   queueFlush();
 });
 controls.onChange.interact = setInteract;
 
 // ------------------------------------------------------------------ camera
-new CameraInput(canvas, () => params.camera, (patch) => {
-  params = { ...params, camera: { ...params.camera, ...patch } };
-  pendingCamera = { ...(pendingCamera || {}), ...patch };
+new CameraInput(canvas, () => store.get().params.camera, (patch) => {
+  store.update((s) => ({
+    params: { ...s.params, camera: { ...s.params.camera, ...patch } },
+    pendingCamera: { ...(s.pendingCamera || {}), ...patch },
+  }));
   queueFlush();
 }, setInteract);
 
 // ------------------------------------------------------------------ server messages
 stream.addEventListener("hello", (e) => { $("stat-renderer").textContent = e.detail.renderer; });
 stream.addEventListener("state", (e) => {
-  const s = e.detail;
-  version = s.version;
-  playing = s.playing;
-  if (!interacting || !params) params = s.params;
-  else params = { ...s.params, camera: params.camera };   // keep the camera being dragged
-  const q = s.query === "v=1" ? "" : s.query;
-  if (location.search.slice(1) !== q) history.replaceState(null, "", q ? `?${q}` : location.pathname);
-  $("play").textContent = playing ? "Pause" : "Play";
-  $("play").setAttribute("aria-pressed", String(playing));
-  $("speed").value = String(s.speed);
-  const look = s.query.replace(/&(play|speed)=[^&]*/g, "");
-  const match = presets.find((p) => p.query === look);
-  $("preset").value = match ? match.name : "";
-  if (redrawNext) { controls.render(params); redrawNext = false; }
+  const { type, ...confirmed } = e.detail;
+  store.update((s) => ({
+    confirmed,
+    // keep the camera being dragged
+    params: s.interacting && s.params ? { ...confirmed.params, camera: s.params.camera } : confirmed.params,
+  }));
+  const s = store.get();
+  if (s.redrawNext) {
+    controls.render(s.params);
+    store.set({ redrawNext: false });
+  }
 });
 stream.addEventListener("error", (e) => {
   toast(e.detail.msg || "error");
-  redrawNext = true;   // the server kept its last valid look: show it again
+  store.set({ redrawNext: true });   // the server kept its last valid look: show it again
   stream.send({ type: "params", params: {} });
 });
 stream.addEventListener("frame", (e) => {
-  simTime = e.detail.time;
-  if (!scrubbing) {
-    const t = $("time");
-    if (simTime > Number(t.max)) t.max = String(Math.ceil(simTime / 600) * 600);
-    t.value = String(simTime);
-  }
-  $("time-out").textContent = `${simTime.toFixed(1)} s`;
-  canvas.dataset.frame = String(e.detail.frame);
-  canvas.dataset.version = String(e.detail.version);
-  canvas.dataset.full = String(e.detail.full);
-  canvas.dataset.frames = String(Number(canvas.dataset.frames || 0) + 1);
+  store.update((s) => ({ lastFrame: e.detail, frames: s.frames + 1 }));
 });
 stream.addEventListener("reconnecting", () => banner("Connection lost — reconnecting…"));
 stream.addEventListener("close", (e) => {
@@ -125,7 +114,44 @@ stream.addEventListener("close", (e) => {
     addEventListener("keydown", resume, true);
   }
 });
-stream.addEventListener("open", () => { banner(null); redrawNext = true; sendView(); });
+stream.addEventListener("open", () => {
+  banner(null);
+  store.set({ redrawNext: true });
+  sendView();
+});
+
+// ------------------------------------------------------------------ views of the state
+store.subscribe((s, prev) => {
+  if (s.confirmed !== prev.confirmed) showConfirmed(s.confirmed);
+  if (s.lastFrame !== prev.lastFrame) showFrame(s);
+});
+
+// the URL and the toolbar show the look the server last confirmed
+function showConfirmed(c) {
+  const q = c.query === "v=1" ? "" : c.query;
+  if (location.search.slice(1) !== q) history.replaceState(null, "", q ? `?${q}` : location.pathname);
+  $("play").textContent = c.playing ? "Pause" : "Play";
+  $("play").setAttribute("aria-pressed", String(c.playing));
+  $("speed").value = String(c.speed);
+  const look = c.query.replace(/&(play|speed)=[^&]*/g, "");
+  const match = presets.find((p) => p.query === look);
+  $("preset").value = match ? match.name : "";
+}
+
+// the time slider (unless it is being dragged) and the canvas's data-* follow the frames
+function showFrame(s) {
+  const f = s.lastFrame;
+  if (!s.scrubbing) {
+    const t = $("time");
+    if (f.time > Number(t.max)) t.max = String(Math.ceil(f.time / 600) * 600);
+    t.value = String(f.time);
+  }
+  $("time-out").textContent = `${f.time.toFixed(1)} s`;
+  canvas.dataset.frame = String(f.frame);
+  canvas.dataset.version = String(f.version);
+  canvas.dataset.full = String(f.full);
+  canvas.dataset.frames = String(s.frames);
+}
 
 // ------------------------------------------------------------------ toolbar
 for (const p of presets) $("preset").append(new Option(p.title, p.name));
@@ -133,17 +159,17 @@ $("preset").append(new Option("(custom)", ""));
 $("preset").addEventListener("change", () => {
   const p = presets.find((x) => x.name === $("preset").value);
   if (!p) return;
-  redrawNext = true;
+  store.set({ redrawNext: true });
   stream.send({ type: "query", query: p.query });
 });
-$("play").addEventListener("click", () => stream.send({ type: "play", playing: !playing }));
+$("play").addEventListener("click", () => stream.send({ type: "play", playing: !playing(store.get()) }));
 $("speed").addEventListener("change", () => stream.send({ type: "speed", speed: Number($("speed").value) }));
 $("time").addEventListener("input", () => {
-  scrubbing = true;
+  store.set({ scrubbing: true });
   $("time-out").textContent = `${Number($("time").value).toFixed(1)} s`;
   stream.send({ type: "seek", time: Number($("time").value) });
 });
-$("time").addEventListener("change", () => { scrubbing = false; });
+$("time").addEventListener("change", () => { store.set({ scrubbing: false }); });
 $("copy-link").addEventListener("click", async () => {
   try {
     await navigator.clipboard.writeText(location.href);
@@ -155,7 +181,7 @@ $("copy-link").addEventListener("click", async () => {
 $("download").addEventListener("click", () => {
   const [w, h] = $("still-size").value.split("x").map(Number);
   const q = new URLSearchParams(location.search);
-  q.set("time", String(Math.round(simTime * 1000) / 1000));
+  q.set("time", String(Math.round(simTime(store.get()) * 1000) / 1000));
   q.set("width", String(w));
   q.set("height", String(h));
   const a = document.createElement("a");
@@ -171,8 +197,7 @@ $("toggle-panel").addEventListener("click", () => {
   $("toggle-panel").setAttribute("aria-expanded", String(!hidden));
   sendView();
 });
-let resizeTimer = 0;
-addEventListener("resize", () => { clearTimeout(resizeTimer); resizeTimer = setTimeout(sendView, 150); });
+addEventListener("resize", debounce(sendView, 150));
 
 function sendView() {
   const stage = $("stage");
@@ -189,13 +214,17 @@ function banner(text) {
   b.hidden = !text;
   b.textContent = text || "";
 }
-let toastTimer = 0;
+const hideToast = debounce(() => { $("toast").hidden = true; }, 4000);
 function toast(text) {
   const t = $("toast");
   t.textContent = text;
   t.hidden = false;
-  clearTimeout(toastTimer);
-  toastTimer = setTimeout(() => { t.hidden = true; }, 4000);
+  hideToast();
+}
+// fn, called `ms` after the last of a burst of calls
+function debounce(fn, ms) {
+  let timer = 0;
+  return () => { clearTimeout(timer); timer = setTimeout(fn, ms); };
 }
 setInterval(() => {
   $("stat-fps").textContent = `${stream.fps().toFixed(1)} fps`;

@@ -227,7 +227,6 @@ export class Controls {
     this.schema = schema;
     this.onChange = onChange;
     this.ctx = { openGroups: new Set(["layers.0"]) };
-    this.value = null;
   }
 
   render(value) {
@@ -235,7 +234,6 @@ export class Controls {
     const active = document.activeElement;
     const focusPath = active && this.form.contains(active) ? active.dataset.path : null;
     if (focusPath && active.type === "number" && active.value !== "") return;  // typing
-    this.value = value;
     const top = resolve(this.schema, this.schema);
     this.form.replaceChildren();
     for (const [name, sub] of Object.entries(top.properties)) {

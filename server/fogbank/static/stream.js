@@ -1,5 +1,8 @@
 // The WebSocket client: connects to /ws with the page's query, draws frames on a canvas,
 // acknowledges them, measures fps and input-to-frame latency, and reconnects by itself.
+// Frames are drawn in the order they arrived (over one WebSocket, the order the server
+// sent them): decoding is async, and a frame whose decode ends after a newer frame was
+// drawn is dropped, never drawn over it.
 
 const HEADER_BYTES = 36;
 const RETRY_CODES = new Set([1006, 1011, 1012, 1013]);
@@ -30,8 +33,10 @@ export class Stream extends EventTarget {
     this.latency = null;
     this.lastFrame = null;
     this.view = null;
-    this.closedByUs = false;
     this.connected = false;
+    this.received = 0;               // binary frames received, counted in arrival order
+    this.drawn = 0;                  // the arrival number of the frame on the canvas
+    this.decode = (blob) => createImageBitmap(blob);   // blob -> ImageBitmap (tests may swap it)
   }
 
   connect() {
@@ -50,7 +55,6 @@ export class Stream extends EventTarget {
       this.connected = false;
       this.sendTimes = [];
       this.dispatchEvent(new CustomEvent("close", { detail: { code: ev.code, reason: ev.reason } }));
-      if (this.closedByUs) return;
       if (RETRY_CODES.has(ev.code) || ev.code === 1001 || ev.code === 1005) {
         const delay = Math.min(4000, 250 * 2 ** this.retry++);
         this.dispatchEvent(new CustomEvent("reconnecting", { detail: { delay, code: ev.code } }));
@@ -84,6 +88,9 @@ export class Stream extends EventTarget {
       return;
     }
     const header = parseHeader(ev.data);
+    // the arrival number orders frames across reconnects too (a new session's frame ids
+    // start again from 1)
+    const seq = ++this.received;
     this.send({ type: "ack", frame: header.frame });
     const now = performance.now();
     for (const [version, t] of this.versionTimes) {
@@ -95,7 +102,12 @@ export class Stream extends EventTarget {
     this.frameTimes.push(now);
     while (this.frameTimes.length && now - this.frameTimes[0] > 2000) this.frameTimes.shift();
     const blob = new Blob([new Uint8Array(ev.data, HEADER_BYTES)], { type: "image/jpeg" });
-    const bitmap = await createImageBitmap(blob);
+    const bitmap = await this.decode(blob);
+    if (seq < this.drawn) {   // a newer frame was decoded first and is on the canvas already
+      bitmap.close();
+      return;
+    }
+    this.drawn = seq;
     if (this.canvas.width !== bitmap.width || this.canvas.height !== bitmap.height) {
       this.canvas.width = bitmap.width;
       this.canvas.height = bitmap.height;
@@ -110,10 +122,5 @@ export class Stream extends EventTarget {
     const n = this.frameTimes.length;
     if (n < 2) return 0;
     return (n - 1) * 1000 / (this.frameTimes[n - 1] - this.frameTimes[0]);
-  }
-
-  close() {
-    this.closedByUs = true;
-    if (this.ws) this.ws.close(1000);
   }
 }
