@@ -6,18 +6,19 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from fogbank.render.probes import fog_only
 from fogbank.tools.bench import _kind_looks, _reference, markdown
 
 
 @pytest.mark.parametrize("kind", ["homogeneous", "height", "cosine", "polynomial", "potential", "sphere"])
 def test_raymarch_converges_to_the_closed_form(renderer, kind):
     still = _kind_looks()[kind].model_copy(update={"width": 160, "height": 90})
-    _, T_an, invd, view = renderer.fog_only(still)
+    _, T_an, invd, view = fog_only(renderer, still)
     ref = _reference(still, invd.astype(np.float64), view)
     assert np.abs(T_an - ref).max() < 1e-3
     errs = []
     for steps in (4, 64, 1024):
-        _, T_rm, _, _ = renderer.fog_only(still, raymarch_steps=steps)
+        _, T_rm, _, _ = fog_only(renderer, still, raymarch_steps=steps)
         errs.append(np.abs(T_rm - ref).max())
     assert errs[-1] < 2e-3
     assert errs[-1] <= max(errs[0], 1e-4)     # more steps never worse (beyond float32 noise)

@@ -59,5 +59,5 @@ def test_first_draw_compile_is_charged_until_the_worker_has_drawn_the_program():
     fresh, warm = cost.estimate(tiny), cost.estimate(tiny, compiled=True)
     assert fresh.seconds > 20.0 > warm.seconds
     assert fresh.biggest(1) == ["compiling the fog program for 16 layers (once per worker)"]
-    grows = [cost.jit_seconds(tuple(("noise/volume", 0) for _ in range(n))) for n in (4, 8, 12, 14, 16)]
+    grows = [cost.jit_seconds(tuple(("noise", ("volume",)) for _ in range(n))) for n in (4, 8, 12, 14, 16)]
     assert grows == sorted(grows) and grows[-1] / grows[-2] > 3.0

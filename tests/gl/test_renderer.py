@@ -20,6 +20,46 @@ def _to_srgb(c):
     return np.where(c <= 0.0031308, c * 12.92, 1.055 * c ** (1 / 2.4) - 0.055) * 255
 
 
+def hand_rotation(camera):
+    """The camera's orientation from its documented convention, written with scipy's
+    rotations and not with scene/camera.py: yaw 0 looks along -z and a positive yaw
+    turns right (toward +x), a rotation of -yaw about +y; then a positive pitch looks up,
+    +pitch about the camera's own x."""
+    from scipy.spatial.transform import Rotation
+    return Rotation.from_euler("YX", [-camera.yaw, camera.pitch], degrees=True)
+
+
+def hand_rays(camera, px, py, width, height):
+    """Unit world rays through pixel centres (py from the bottom): camera space x right,
+    y up, -z forward, the vertical field of view `fov`."""
+    tan = np.tan(np.radians(camera.fov) / 2)
+    nx = (np.asarray(px) + 0.5) / width * 2 - 1
+    ny = (np.asarray(py) + 0.5) / height * 2 - 1
+    v = np.stack([nx * tan * width / height, ny * tan, -np.ones_like(nx, dtype=float)], axis=-1)
+    w = hand_rotation(camera).apply(v.reshape(-1, 3))
+    return w / np.linalg.norm(w, axis=1, keepdims=True)
+
+
+def test_the_projection_matches_a_hand_written_camera():
+    """The renderer's view-projection matrix (the scene's raster) and view rays (the fog
+    pass) against the hand-written camera, for random cameras and points."""
+    from fogbank.model.params import Camera
+    rng = np.random.default_rng(8)
+    for _ in range(50):
+        c = Camera(position=tuple(rng.uniform(-100, 100, 3)), yaw=float(rng.uniform(-360, 360)),
+                   pitch=float(rng.uniform(-89, 89)), fov=float(rng.uniform(10, 120)))
+        w_, h_ = int(rng.integers(16, 2000)), int(rng.integers(16, 2000))
+        view = cam.view(c, w_, h_)
+        px, py = rng.uniform(0, w_, 20), rng.uniform(0, h_, 20)
+        assert np.abs(view.ray(px, py, w_, h_) - hand_rays(c, px, py, w_, h_)).max() < 1e-12
+        # a point on each hand ray, 5-500 m out, projects back to its pixel centre
+        pts = np.asarray(c.position) + hand_rays(c, px, py, w_, h_) * rng.uniform(5, 500, (20, 1))
+        clip = np.c_[pts, np.ones(20)] @ view.view_proj.T
+        ndc = clip[:, :2] / clip[:, 3:4]
+        got = np.c_[(ndc[:, 0] + 1) / 2 * w_ - 0.5, (ndc[:, 1] + 1) / 2 * h_ - 0.5]
+        assert np.abs(got - np.c_[px, py]).max() < 1e-6 * max(w_, h_)
+
+
 def _cast(eye, w):
     """Nearest hit of rays w from eye with the calibration scene: (distance, object index);
     index -1 is the sky, 0 the ground, 1.. the boxes."""
@@ -80,7 +120,7 @@ def _check_pixels(renderer, still, min_share=0.8):
     view = cam.view(still.camera, W, H)
     py, px = np.mgrid[0:H, 0:W]
     gl_y = H - 1 - py                                  # image rows are top first
-    w = view.ray(px.ravel(), gl_y.ravel(), W, H)
+    w = hand_rays(still.camera, px.ravel(), gl_y.ravel(), W, H)   # not the renderer's camera
     d, obj = _cast(view.eye, w)
     obj = np.where(d < cam.FAR, obj, -1).reshape(H, W)   # beyond the far plane: sky
     # interior pixels only: the 3x3 neighbourhood sees the same object (MSAA edges excluded)
@@ -184,8 +224,10 @@ def test_blur_softens_edges_only_where_there_is_fog(renderer, mode):
 
 
 def test_any_valid_look_renders(renderer):
-    """Random valid looks (all kinds, extreme sizes and effects) render without a GL error
-    and give finite pixels."""
+    """Random valid looks (all kinds, extreme sizes and effects) render without a GL error,
+    and their fog pass gives a finite transmittance in [0, 1] at every texel (a NaN would
+    show only as a black pixel in the uint8 image)."""
+    from fogbank.render.probes import fog_only
     from draws import ALL, random_layer
     rng = np.random.default_rng(42)
     for i in range(64):   # more layer variants than the program cache keeps (48)
@@ -203,12 +245,15 @@ def test_any_valid_look_renders(renderer):
         img = renderer.render(still)
         assert img.shape == (still.height, still.width, 3)
         assert renderer.ctx.error == "GL_NO_ERROR"
+        _, T, _, _ = fog_only(renderer, still)
+        assert bool(np.all(np.isfinite(T))) is True
+        assert (float(T.min()) >= 0.0, float(T.max()) <= 1.0) == (True, True)
 
 
 def test_preview_reuses_a_full_quality_scene_pass(renderer):
     still = StillParams(width=W, height=H, layers=[{"kind": "homogeneous", "density": 0.02}])
     full = renderer.render(still, slot="preview-test", msaa=True)
-    g = renderer._gbuffer("preview-test", W, H)
+    g = renderer.caches.gbuffer("preview-test", W, H)
     key = g.scene_key
     preview = renderer.render(still, slot="preview-test", msaa=False)
     assert g.scene_key == key                       # no redraw without MSAA
@@ -253,3 +298,27 @@ def test_growing_ray_targets_and_dropping_caches_leave_no_gl_error(renderer):
     renderer.drop_slot("s1")
     renderer.release_caches()
     assert renderer.ctx.error == "GL_NO_ERROR"
+
+
+def test_particle_quads_match_the_reference_at_every_fog_texel(renderer):
+    """The pass that draws particles in frames (instanced quads multiplied into the fog
+    target) against the float64 product of the particles' clarities along each texel's
+    ray (hand-written camera), the particle state simulated independently of the renderer."""
+    from fogbank.kinds.particle_motion import simulate
+    from fogbank.render.probes import fog_only
+    from fogbank.scene import terrain
+    still = calibration_still(time=4.0, density=1.3, layers=[
+        {"kind": "particles", "count": 300, "emitter": (0.0, 1.0, -40.0), "spread": 70.0, "speed": 3.0,
+         "radius": 5.0, "alpha": 0.5, "life_min": 30, "life_max": 60}])
+    _, T, invd, view = fog_only(renderer, still)
+    h, w = T.shape
+    py, px = np.mgrid[0:h, 0:w]
+    dirs = hand_rays(still.camera, px.ravel(), py.ravel(), w, h)
+    d = np.where(invd.ravel() > 0, 1.0 / np.maximum(invd.ravel().astype(np.float64), 1e-30),
+                 still.effects.sky_distance)
+    fog = still.fog()
+    state = simulate(fog.layers[0], fog.time, fog.wind.vector(), terrain.flat)
+    want = reference(fog, np.broadcast_to(view.eye, dirs.shape), dirs, d, fog.time, states={0: state})
+    err = np.abs(T.ravel() - want)
+    assert float(err.max()) <= 2e-4
+    assert float(np.ptp(want)) > 0.3   # the particles cover part of the view: the check has teeth

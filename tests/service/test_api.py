@@ -135,7 +135,11 @@ def test_schema_has_ranges_steps_units(client):
     defs = s["$defs"]
     yaw = defs["Camera"]["properties"]["yaw"]
     assert yaw["minimum"] == -360 and yaw["maximum"] == 360 and yaw["step"] == 0.5 and yaw["unit"] == "deg"
-    assert "discriminator" in str(s["properties"]["layers"]) or "oneOf" in str(s["properties"]["layers"])
+    # the layer union: one branch per registered kind, told apart by `kind`
+    from fogbank.kinds import KINDS
+    items = s["properties"]["layers"]["items"]
+    assert sorted(items["discriminator"]["mapping"]) == sorted(KINDS)
+    assert len(items["oneOf"]) == len(KINDS)
     assert s["properties"]["width"]["maximum"] == 4096
 
 

@@ -182,3 +182,17 @@ def test_negative_density_carves_and_the_total_stays_nonnegative():
     assert transmittance(fog, O, w, np.array([100.0]), 0.0)[0] == pytest.approx(np.exp(-0.02 * 90), rel=1e-12)
     carve = FogParams(layers=[Box(center=(0.0, 0.0, 0.0), half_size=(5.0, 5.0, 5.0), density=-1.0).model_dump()])
     assert transmittance(carve, O, w, np.array([100.0]), 0.0)[0] == 1.0
+
+
+@pytest.mark.parametrize("kind", sorted(MODULES))
+def test_the_global_density_scales_every_optical_depth(kind):
+    """env.weight (the global density) multiplies each kind's optical depth: the
+    composition folds it in nowhere else."""
+    rng = np.random.default_rng(200 + sorted(MODULES).index(kind))
+    for _ in range(10):
+        layer = random_layer(kind, rng)
+        O, w = rng.normal(size=(1, 3)) * 15, unit(rng.normal(size=(1, 3)))
+        d, t = np.array([rng.uniform(1, 120)]), np.array([rng.uniform(0, 10)])
+        one = MODULES[kind].optical_depth(layer, O, w, d, t, Env(wind=WIND))[0]
+        more = MODULES[kind].optical_depth(layer, O, w, d, t, Env(wind=WIND, weight=2.5))[0]
+        assert more == pytest.approx(2.5 * one, rel=1e-12, abs=1e-300)

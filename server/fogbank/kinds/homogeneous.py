@@ -21,7 +21,7 @@ def density(layer, x, t, env):
 
 
 def optical_depth(layer, O, omega, d, t, env):
-    return layer.density * d
+    return env.weight * layer.density * d
 
 
 KIND = Kind(

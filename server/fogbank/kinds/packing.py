@@ -13,6 +13,8 @@ float64 (docs/accuracy.md).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from fogbank.kinds import KINDS
@@ -85,7 +87,22 @@ def direct_density(fog) -> float:
 def pack(fog, particle_states: dict[int, tuple[np.ndarray, np.ndarray]],
          ref=(0.0, 0.0, 0.0), time: float = 0.0):
     """Returns (uLayer data float32 (MAX_LAYERS*LAYER_VEC4, 4), particles float32
-    (MAX_PARTICLES, 4)) for the enabled layers, in the order of `variant(fog)`.
+    (MAX_PARTICLES, 4)) for the enabled layers, in the order of `variant(fog)`."""
+    packed = pack_layers(fog, particle_states, ref, time)
+    return packed.data, packed.particles
+
+
+@dataclass
+class Packed:
+    data: np.ndarray          # uLayer, float32 (MAX_LAYERS * LAYER_VEC4, 4)
+    particles: np.ndarray     # the particle texture's row, float32 (MAX_PARTICLES, 4)
+    values: list[dict]        # each enabled layer's slot values (float64), in slot order
+    kinds: list[str]          # each enabled layer's kind, in slot order
+
+
+def pack_layers(fog, particle_states: dict[int, tuple[np.ndarray, np.ndarray]],
+                ref=(0.0, 0.0, 0.0), time: float = 0.0) -> Packed:
+    """The enabled layers packed into uLayer by each kind's declared slots.
 
     Everything that depends on where or when is taken here in float64, relative to the
     reference point `ref` (the eye of a frame, the origin of a group of rays) and slid by
@@ -97,11 +114,15 @@ def pack(fog, particle_states: dict[int, tuple[np.ndarray, np.ndarray]],
     data = np.zeros((MAX_LAYERS * LAYER_VEC4, 4), np.float64)
     p = Packing(fog=fog, ref=np.asarray(ref, dtype=np.float64), time=time, density=fog.density,
                 states=particle_states, particles=np.zeros((MAX_PARTICLES, 4), np.float64))
+    values, kinds = [], []
     for n, (i, layer) in enumerate(enabled(fog)):
         kind = KINDS[layer.kind]
         p.index = i
-        kind.layout.write(data[n * LAYER_VEC4:(n + 1) * LAYER_VEC4], kind.pack(layer, p))
-    return data.astype(np.float32), p.particles.astype(np.float32)
+        v = kind.pack(layer, p)
+        kind.layout.write(data[n * LAYER_VEC4:(n + 1) * LAYER_VEC4], v)
+        values.append(v)
+        kinds.append(layer.kind)
+    return Packed(data.astype(np.float32), p.particles.astype(np.float32), values, kinds)
 
 
 def uses_noise(fog) -> bool:

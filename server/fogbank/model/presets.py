@@ -12,7 +12,7 @@ import math
 from functools import lru_cache
 from typing import Any
 
-from fogbank.scene.meshes import landmarks
+from fogbank.scene.landmarks import landmarks
 
 PI = math.pi
 
@@ -126,6 +126,32 @@ def _presets() -> dict[str, dict[str, Any]]:
                        "layers": [{"kind": "noise", "mode": "surface", "density": 0.004, "scale": 70.0,
                                    "height_falloff": True, "falloff_scale": 20.0, "wind": True}]},
         },
+        "fog-volumes": {
+            "title": "Fog volumes: a box and an ellipsoid",
+            "description": "A rotated box of constant fog lying along the river at the bridge "
+                           "(tau = rho times the chord, slab method) and an ellipsoidal cloud over "
+                           "the forest (the sphere's 1 - r^2 profile in the ellipsoid's metric), "
+                           "over a thin ground haze.",
+            "params": {"camera": view,
+                       "layers": [
+                           {"kind": "height", "density": 0.006, "falloff": 0.08, "base": 0.0},
+                           {"kind": "box", "center": (bx, 3.0, bz - 25.0), "half_size": (14.0, 5.0, 45.0),
+                            "yaw": -12.0, "density": 0.07},
+                           {"kind": "ellipsoid", "center": (fx, fy + 6.0, fz), "radii": (38.0, 9.0, 24.0),
+                            "yaw": 30.0, "pitch": 6.0, "density": 0.16}]},
+        },
+        "carved-clearing": {
+            "title": "A clearing carved out of the fog",
+            "description": "Dense valley fog with an ellipsoid of negative density around the "
+                           "house (Biri's subtracted objects, Godot's negative FogVolume): the "
+                           "fog is carved away there, and the total optical depth never drops "
+                           "below 0.",
+            "params": {"camera": house_view,
+                       "layers": [
+                           {"kind": "height", "density": 0.05, "falloff": 0.04, "base": 0.0},
+                           {"kind": "ellipsoid", "center": (hx, hy, hz), "radii": (22.0, 14.0, 22.0),
+                            "density": -0.12}]},
+        },
         "gawron-distance": {
             "title": "Gawron & Boryczka 2018: distance fog",
             "description": "Distance fog with noise-varied density, orange sun in-scattering and "
@@ -155,13 +181,22 @@ def merge(base: Any, patch: Any) -> Any:
     return patch
 
 
+def patched(patch: dict, base: dict | None = None, cls=None):
+    """A look: `patch` merged over `base` (by default the default preset), validated as
+    `cls` (FogParams by default). The one place a patch meets its base: REST bodies, the
+    WebSocket's params and camera messages and the presets themselves come through here.
+    Raises pydantic's ValidationError, each error's loc relative to the look."""
+    from fogbank.model.params import FogParams
+    cls = cls or FogParams
+    return cls.model_validate(merge(preset_dict("default") if base is None else base, patch))
+
+
 @lru_cache(maxsize=32)
 def _preset_json(name: str) -> str:
     from fogbank.model.params import FogParams
     if name not in presets():
         raise KeyError(name)
-    base = FogParams().model_dump(mode="json")
-    return FogParams.model_validate(merge(base, presets()[name]["params"])).model_dump_json()
+    return patched(presets()[name]["params"], FogParams().model_dump(mode="json")).model_dump_json()
 
 
 def preset_dict(name: str) -> dict:

@@ -26,6 +26,7 @@ from urllib.parse import parse_qsl, quote
 from pydantic import BaseModel
 
 from fogbank.model import presets as P
+from fogbank.model.errors import error, summary
 from fogbank.model.params import LAYER_CLASSES, FogParams, StillParams
 
 VERSION = 1
@@ -42,7 +43,7 @@ class URLError(ValueError):
     """A malformed query; `errors` are FastAPI-shaped {loc, msg, type} dicts."""
 
     def __init__(self, errors: list[dict[str, Any]]):
-        super().__init__("; ".join(f"{'.'.join(map(str, e['loc']))}: {e['msg']}" for e in errors))
+        super().__init__("; ".join(summary([e]) for e in errors))
         self.errors = errors
 
 
@@ -188,14 +189,12 @@ def decode(query: str, cls: type[FogParams] = FogParams) -> tuple[dict, str]:
     `cls` gives the params. Raises URLError for a malformed query.
     """
     if len(query) > MAX_QUERY:
-        raise URLError([{"loc": ["query"], "msg": f"query longer than {MAX_QUERY} characters",
-                         "type": "url_too_long"}])
+        raise URLError([error(["query"], f"query longer than {MAX_QUERY} characters", "url_too_long")])
     try:
         pairs = parse_qsl(query, keep_blank_values=True, strict_parsing=bool(query),
                           max_num_fields=1000)
     except ValueError as exc:
-        raise URLError([{"loc": ["query"], "msg": f"malformed query string: {exc}",
-                         "type": "url_malformed"}]) from None
+        raise URLError([error(["query"], f"malformed query string: {exc}", "url_malformed")]) from None
     fields: dict[str, str] = {}
     errors: list[dict[str, Any]] = []
     for k, v in pairs:
@@ -229,7 +228,7 @@ def decode(query: str, cls: type[FogParams] = FogParams) -> tuple[dict, str]:
 
 
 def _err(errors, key, msg, kind="url_field"):
-    errors.append({"loc": ["query", key], "msg": msg, "type": kind})
+    errors.append(error(["query", key], msg, kind))
 
 
 def _set(cls, value, key, text, errors) -> None:

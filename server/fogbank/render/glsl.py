@@ -95,13 +95,31 @@ def load(name: str, defines: dict[str, object] | None = None, root: Path = SHADE
 
 
 def program(ctx, vertex: str, fragment: str, defines: dict[str, object] | None = None,
-            generated: dict[str, str] | None = None):
+            generated: dict[str, str] | None = None, root: Path = SHADER_DIR):
     """Compile and link a program; a failure raises ShaderError naming file and line."""
-    vs, fs = load(vertex, defines, generated=generated), load(fragment, defines, generated=generated)
+    vs = load(vertex, defines, root=root, generated=generated)
+    fs = load(fragment, defines, root=root, generated=generated)
     try:
-        return ctx.program(vertex_shader=vs.text, fragment_shader=fs.text)
+        prog = ctx.program(vertex_shader=vs.text, fragment_shader=fs.text)
     except Exception as exc:  # moderngl raises a plain Error with the driver's log
         msg = str(exc)
         stage = fragment if "fragment" in msg.lower() else vertex
         src = fs if stage == fragment else vs
         raise ShaderError(f"{stage}: {src.explain(msg)}") from None
+    # what the sources declare, for render/gl.py set_uniform (active uniforms are fewer:
+    # the compiler drops the ones a variant does not use)
+    prog.extra = {"name": fragment, "declared": declared_uniforms(vs.text, fs.text)}
+    return prog
+
+
+_UNIFORM = re.compile(r"^\s*uniform\s+\w+\s+([^;]+);", re.M)
+
+
+def declared_uniforms(*sources: str) -> frozenset[str]:
+    """The uniform names the GLSL sources declare (`uniform vec3 uFwd, uRight;` too)."""
+    names = set()
+    for text in sources:
+        for decl in _UNIFORM.findall(text):
+            for part in decl.split(","):
+                names.add(re.split(r"[\s\[]", part.strip(), maxsplit=1)[0])
+    return frozenset(names)

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fogbank.model.params import Camera
+from fogbank.model.params import Camera  # the type only: scene reads the model, never the reverse
 
 NEAR = 0.25   # m
 FAR = 4000.0  # m

@@ -16,7 +16,8 @@ from functools import lru_cache
 import numpy as np
 
 from fogbank.scene import terrain
-from fogbank.model.params import srgb_to_linear
+from fogbank.scene.landmarks import HOUSE, landmarks, tree_spots  # noqa: F401
+from fogbank.model.fields import srgb_to_linear
 
 VERTEX_FLOATS = 10
 CHUNKS = 8   # terrain chunks per side
@@ -29,14 +30,6 @@ class Mesh:
     terrain_chunks: np.ndarray     # (K, 5): first index, index count, centre x, y, z
     objects: np.ndarray            # (K, 10) float32, plain triangles
     bounds: tuple[np.ndarray, float]  # centre and half-size, for the shadow map
-
-
-@dataclass(frozen=True)
-class Landmarks:
-    house: tuple[float, float, float]
-    bridge: tuple[float, float, float]
-    trees: tuple[tuple[float, float, float], ...]     # crown centres, the first four named
-    forest: tuple[float, float, float]
 
 
 def _rgb(hex_: str) -> np.ndarray:
@@ -153,41 +146,6 @@ def _terrain_grid(n: int = 288):
     return verts, np.concatenate(idx).astype(np.uint32), np.array(chunks, dtype=np.float64)
 
 
-def _tree_spots() -> list[tuple[float, float, str]]:
-    rng = np.random.default_rng(2002)
-    spots: list[tuple[float, float, str]] = [
-        (68.0, -38.0, "pine"), (52.0, -62.0, "pine"), (84.0, -70.0, "oak"), (-22.0, -44.0, "oak")]
-    tries = 0
-    while len(spots) < 110 and tries < 5000:
-        tries += 1
-        if rng.random() < 0.8:   # the forest, east of the river
-            x, z = rng.normal(75, 24), rng.normal(-60, 26)
-        else:                    # scattered trees
-            x, z = rng.uniform(-190, 190), rng.uniform(-190, 120)
-        if abs(x - float(terrain.river_x(z))) < 14 or abs(z - terrain.ROAD_Z) < 8:
-            continue
-        if abs(x + 40) < 12 and abs(z + 28) < 11:  # the house
-            continue
-        if any((x - sx) ** 2 + (z - sz) ** 2 < 20 for sx, sz, _ in spots):
-            continue
-        spots.append((x, z, "pine" if rng.random() < 0.7 else "oak"))
-    return spots
-
-
-HOUSE = (-40.0, -28.0)
-
-
-@lru_cache(maxsize=1)
-def landmarks() -> Landmarks:
-    trees = []
-    for x, z, kind in _tree_spots()[:4]:
-        y = float(terrain.height(x, z))
-        trees.append((x, y + (6.0 if kind == "pine" else 5.5), z))
-    hx, hz = HOUSE
-    bx = float(terrain.river_x(terrain.ROAD_Z))
-    return Landmarks(house=(hx, float(terrain.height(hx, hz)) + 3.0, hz),
-                     bridge=(bx, terrain.BRIDGE_DECK, terrain.ROAD_Z),
-                     trees=tuple(trees), forest=(75.0, float(terrain.height(75, -60)) + 5, -60.0))
 
 
 def _house() -> list[np.ndarray]:
@@ -246,7 +204,7 @@ def _bridge() -> list[np.ndarray]:
 def _trees() -> list[np.ndarray]:
     parts = []
     rng = np.random.default_rng(77)
-    for x, z, kind in _tree_spots():
+    for x, z, kind in tree_spots():
         y = float(terrain.height(x, z)) - 0.3
         s = rng.uniform(0.8, 1.25)
         trunk = _rgb("#4a3526")

@@ -21,6 +21,7 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 from pydantic import BaseModel, Field, ValidationError, model_validator
 
 from fogbank import STATIC_DIR, __version__
+from fogbank.model import errors
 
 from fogbank.workers import cost
 
@@ -74,44 +75,20 @@ class TransmittanceResponse(BaseModel):
     renderer: str
 
 
-def _safe(v):
-    """Text that can be sent as UTF-8: user strings may hold lone surrogates ('\\ud800'
-    from a JSON escape), which made the 422 itself fail with a 500."""
-    if isinstance(v, str):
-        return v.encode("utf-8", "backslashreplace").decode("utf-8")
-    return v
-
-
-def _clean(e: dict) -> dict:
-    """A JSON-safe error: loc, msg, type, and the offending input when it is small."""
-    out = {"loc": [_safe(x) for x in e.get("loc", ())], "msg": _safe(str(e.get("msg", ""))),
-           "type": e.get("type", "")}
-    v = e.get("input")
-    if isinstance(v, bool) or (isinstance(v, int) and abs(v) < 10 ** 200):
-        out["input"] = v
-    elif isinstance(v, str) and len(v) <= 200:
-        out["input"] = _safe(v)
-    elif isinstance(v, float):
-        out["input"] = v if math.isfinite(v) else str(v)
-    return out
-
-
 def _validation_error(exc: ValidationError, prefix: tuple) -> RequestValidationError:
-    return RequestValidationError([dict(e, loc=(*prefix, *e["loc"]))
-                                   for e in exc.errors(include_url=False)])
+    return RequestValidationError(errors.from_validation(exc, prefix))
 
 
 def resolve(patch: dict, cls=StillParams, prefix: tuple = ("body",)):
     """A request's params: `patch` merged over the default preset, validated."""
     if not isinstance(patch, dict):
-        raise RequestValidationError([{"loc": list(prefix), "msg": "expected a JSON object",
-                                       "type": "dict_type"}])
+        raise RequestValidationError([errors.error(prefix, "expected a JSON object", "dict_type")])
     base = P.preset_dict("default")
     if cls is StillParams:
         base.update(width=StillParams.model_fields["width"].default,
                     height=StillParams.model_fields["height"].default)
     try:
-        return cls.model_validate(P.merge(base, patch))
+        return P.patched(patch, base, cls)
     except ValidationError as exc:
         raise _validation_error(exc, prefix) from None
 
@@ -143,18 +120,16 @@ class StillCache:
 def _over_budget(c: cost.Cost, settings: Settings, what: str) -> RequestValidationError | None:
     """A 422 naming what to reduce, when `c` is beyond the still budgets."""
     if c.memory > settings.still_memory_mb << 20:
-        return RequestValidationError([{
-            "loc": ["body", "width"], "type": "cost",
-            "msg": f"{what} needs about {c.memory / 2**20:.0f} MiB of render targets; this server allows "
-                   f"{settings.still_memory_mb} MiB: reduce width*height"}])
+        return RequestValidationError([errors.error(
+            ["body", "width"], f"{what} needs about {c.memory / 2**20:.0f} MiB of render targets; "
+            f"this server allows {settings.still_memory_mb} MiB: reduce width*height", "cost")])
     if c.seconds > settings.still_budget_s:
-        return RequestValidationError([{
-            "loc": ["body"], "type": "cost",
-            "msg": f"{what} is estimated at {c.seconds:.1f} s of rendering; this server allows "
-                   f"{settings.still_budget_s:g} s. Reduce what costs most: " + "; ".join(
-                       f"{k} ~{c.parts[k]:.1f} s" for k in c.biggest())
-                   + " (fewer or cheaper layers, fewer volume samples, a larger effects.fog_scale, "
-                     "or fewer pixels)"}])
+        return RequestValidationError([errors.error(
+            ["body"], f"{what} is estimated at {c.seconds:.1f} s of rendering; this server allows "
+            f"{settings.still_budget_s:g} s. Reduce what costs most: " + "; ".join(
+                f"{k} ~{c.parts[k]:.1f} s" for k in c.biggest())
+            + " (fewer or cheaper layers, fewer volume samples, a larger effects.fog_scale, "
+              "or fewer pixels)", "cost")])
     return None
 
 
@@ -194,14 +169,14 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 
     @app.exception_handler(RequestValidationError)
     async def _422(request: Request, exc: RequestValidationError):
-        return JSONResponse({"detail": [_clean(e) for e in exc.errors()]}, status_code=422)
+        return JSONResponse(errors.body(exc.errors()), status_code=422)
 
     @app.exception_handler(StarletteHTTPException)
     async def _http(request: Request, exc: StarletteHTTPException):
         if exc.status_code == 400 and "parsing the body" in str(exc.detail):
             # a body that is not JSON (or not UTF-8): bad input like any other, 422
-            return JSONResponse({"detail": [{"loc": ["body"], "msg": "the body is not valid JSON",
-                                             "type": "json_invalid"}]}, status_code=422)
+            return JSONResponse(errors.body([errors.error(["body"], "the body is not valid JSON",
+                                                          "json_invalid")]), status_code=422)
         return JSONResponse({"detail": exc.detail}, status_code=exc.status_code,
                             headers=getattr(exc, "headers", None))
 
@@ -299,8 +274,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         try:
             body = json.loads(raw) if raw.strip() else {}
         except (ValueError, RecursionError) as exc:
-            raise RequestValidationError([{"loc": ["body"], "msg": f"malformed JSON: {exc}",
-                                           "type": "json_invalid"}]) from None
+            raise RequestValidationError([errors.error(["body"], f"malformed JSON: {exc}",
+                                                       "json_invalid")]) from None
         return await _still(resolve(body), format, request, "body")
 
     @app.post("/api/transmittance", response_model=TransmittanceResponse,
@@ -315,9 +290,9 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         big = np.abs(W).max(axis=1)
         bad = np.nonzero(~(big > 0))[0]
         if len(bad):
-            raise RequestValidationError([{"loc": ["body", "rays", int(bad[0]), "direction"],
-                                           "msg": "direction must be a non-zero vector",
-                                           "type": "value_error"}])
+            raise RequestValidationError([errors.error(["body", "rays", int(bad[0]), "direction"],
+                                                       "direction must be a non-zero vector",
+                                                       "value_error")])
         W = W / big[:, None]                  # scaled first: tiny vectors do not underflow
         W = W / np.linalg.norm(W, axis=1)[:, None]
         D = np.array([r.length for r in req.rays])
@@ -326,12 +301,11 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         c = cost.transmittance_seconds(fog, len(D), len(np.unique(Tm)), settings.cost_scale, groups)
         if c.seconds > settings.still_budget_s:
             metrics.ERRORS.labels("cost").inc()
-            raise RequestValidationError([{
-                "loc": ["body", "rays"], "type": "cost",
-                "msg": f"this request is estimated at {c.seconds:.1f} s (each distinct ray time "
-                       "simulates every particle layer, each distinct origin and time is one draw); "
-                       f"this server allows {settings.still_budget_s:g} s: use fewer distinct times, "
-                       "origins or particles"}])
+            raise RequestValidationError([errors.error(
+                ["body", "rays"], f"this request is estimated at {c.seconds:.1f} s (each distinct "
+                "ray time simulates every particle layer, each distinct origin and time is one "
+                f"draw); this server allows {settings.still_budget_s:g} s: use fewer distinct "
+                "times, origins or particles", "cost")])
         out = await _job(_slot_for(c.seconds), worker.transmittance, fog, O, W, D, Tm,
                          deadline=settings.render_timeout_s)
         return {"transmittance": [float(x) for x in out["T"]],

@@ -12,11 +12,13 @@ import json
 
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
+from fogbank.model import errors
+
 MAX_HEAD_BYTES = 1 << 20   # h11's buffer for a request line and headers
 
 
 async def _refuse(send: Send, status: int, loc: str, msg: str) -> None:
-    body = json.dumps({"detail": [{"loc": [loc], "msg": msg, "type": "too_large"}]}).encode()
+    body = errors.body_bytes([errors.error([loc], msg, "too_large")])
     await send({"type": "http.response.start", "status": status,
                 "headers": [(b"content-type", b"application/json"), (b"content-length", str(len(body)).encode()),
                             (b"connection", b"close")]})
@@ -97,9 +99,9 @@ def json_h11_protocol():
 
     class JSONErrorsH11(H11Protocol):
         def send_400_response(self, msg: str) -> None:
-            body = json.dumps({"detail": [{"loc": ["request"], "type": "bad_request",
-                                           "msg": f"the request is malformed, or its line and headers exceed "
-                                                  f"{MAX_HEAD_BYTES} bytes"}]}).encode()
+            body = errors.body_bytes([errors.error(
+                ["request"], f"the request is malformed, or its line and headers exceed "
+                f"{MAX_HEAD_BYTES} bytes", "bad_request")])
             event = h11.Response(status_code=400, reason=b"Bad Request",
                                  headers=[(b"content-type", b"application/json"), (b"connection", b"close")])
             for ev in (event, h11.Data(data=body), h11.EndOfMessage()):

@@ -24,6 +24,8 @@ from typing import Annotated, Any, Literal, Union
 
 from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError
 
+from fogbank.model.errors import clean, error, from_validation
+
 PROTOCOL = 1
 MAX_MESSAGE = 64 * 1024
 # magic, frame id, params version, sim time (s), render ms, encode ms, width, height,
@@ -107,26 +109,24 @@ def parse(text: str | bytes) -> BaseModel:
         try:
             text = text.decode("utf-8")
         except UnicodeDecodeError:
-            raise ProtocolError([{"loc": ["message"], "msg": "messages are UTF-8 JSON text",
-                                  "type": "message_encoding"}]) from None
+            raise ProtocolError([error(["message"], "messages are UTF-8 JSON text",
+                                       "message_encoding")]) from None
     try:
         data = json.loads(text)
     except (ValueError, RecursionError) as exc:   # incl. integers over Python's 4300 digits
-        raise ProtocolError([{"loc": ["message"], "msg": f"malformed JSON: {exc}",
-                              "type": "json_invalid"}]) from None
+        raise ProtocolError([error(["message"], f"malformed JSON: {exc}", "json_invalid")]) from None
     if not isinstance(data, dict):
-        raise ProtocolError([{"loc": ["message"], "msg": "a message is a JSON object",
-                              "type": "message_type"}])
+        raise ProtocolError([error(["message"], "a message is a JSON object", "message_type")])
     kind = data.get("type")
     if kind not in TYPES:
-        raise ProtocolError([{"loc": ["message", "type"],
-                              "msg": f"unknown message type {kind!r}; one of {', '.join(TYPES)}",
-                              "type": "message_type"}])
+        raise ProtocolError([error(["message", "type"],
+                                   f"unknown message type {kind!r}; one of {', '.join(TYPES)}",
+                                   "message_type")])
     try:
         return _adapter.validate_python(data)
     except ValidationError as exc:
-        raise ProtocolError([{"loc": ["message", *e["loc"][1:]], "msg": e["msg"], "type": e["type"]}
-                             for e in exc.errors(include_url=False)]) from None
+        raise ProtocolError([clean(dict(e, loc=["message", *e["loc"][1:]]))
+                             for e in from_validation(exc)]) from None
 
 
 def frame_header(frame: int, version: int, sim_time: float, render_ms: float, encode_ms: float,

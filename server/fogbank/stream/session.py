@@ -14,6 +14,7 @@ from typing import Any
 
 from pydantic import ValidationError
 
+from fogbank.model import errors
 from fogbank.model import presets as P
 from fogbank.model.params import FogParams, StillParams
 from fogbank.stream.protocol import (AckMsg, CameraMsg, InteractMsg, ParamsMsg, PlayMsg, QueryMsg, SeekMsg,
@@ -36,14 +37,6 @@ class FrameJob:
     quality: int
     full: bool
     playing: bool
-
-
-def _errors(exc: ValidationError, prefix: list) -> list[dict[str, Any]]:
-    out = []
-    for e in exc.errors(include_url=False):
-        item = {"loc": [*prefix, *e["loc"]], "msg": e["msg"], "type": e["type"]}
-        out.append(item)
-    return out
 
 
 class Session:
@@ -115,16 +108,14 @@ class Session:
                 return [self.state(now)]
             if isinstance(msg, (ParamsMsg, CameraMsg)):
                 patch = msg.params if isinstance(msg, ParamsMsg) else {"camera": msg.camera}
-                base = P.preset_dict("default") if getattr(msg, "replace", False) else \
-                    self.fog.model_dump(mode="json")
-                fog = FogParams.model_validate(P.merge(base, patch))
+                base = None if getattr(msg, "replace", False) else self.fog.model_dump(mode="json")
+                fog = P.patched(patch, base)
                 self._set_fog(fog, now)
                 return [self.state(now)]
         except ValidationError as exc:
             prefix = ["params"] if isinstance(msg, ParamsMsg) else []
-            errs = _errors(exc, prefix)
-            return [{"type": "error", "detail": errs,
-                     "msg": f"{'.'.join(map(str, errs[0]['loc']))}: {errs[0]['msg']}"}]
+            errs = [errors.clean(e) for e in errors.from_validation(exc, prefix)]
+            return [{"type": "error", "detail": errs, "msg": errors.summary(errs)}]
         if isinstance(msg, PlayMsg):
             if msg.playing != self.playing:
                 t = self.sim_time(now)

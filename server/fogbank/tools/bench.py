@@ -24,6 +24,7 @@ from fogbank.tools.child import ChildServer
 from fogbank.render.encode import encode
 from fogbank.model.params import FogParams, StillParams
 from fogbank.kinds.homogeneous import Homogeneous
+from fogbank.render.probes import fog_only
 from fogbank.render.renderer import Renderer, create_context
 
 TOL = 1.0 / 255.0
@@ -82,12 +83,12 @@ def _reference(still: StillParams, invd: np.ndarray, view) -> np.ndarray:
 def analytic_vs_raymarch(r: Renderer, repeat: int = 9, max_steps: int = 2048) -> list[dict]:
     rows = []
     for kind, still in _kind_looks().items():
-        _, T_an, invd, view = r.fog_only(still)
+        _, T_an, invd, view = fog_only(r, still)
         ref = _reference(still, invd.astype(np.float64), view)
         err_an = float(np.abs(T_an - ref).max())
 
         def err_at(n):
-            _, T_rm, _, _ = r.fog_only(still, raymarch_steps=n)
+            _, T_rm, _, _ = fog_only(r, still, raymarch_steps=n)
             return float(np.abs(T_rm - ref).max())
         n, errs = 1, {}
         while n <= max_steps:
@@ -105,12 +106,12 @@ def analytic_vs_raymarch(r: Renderer, repeat: int = 9, max_steps: int = 2048) ->
                 lo, hi = (lo, mid) if errs[mid] <= TOL else (mid, hi)
             steps = hi
         use = steps or max_steps
-        r.fog_only(still, raymarch_steps=use, read=False)   # compile outside the timing
+        fog_only(r, still, raymarch_steps=use, read=False)   # compile outside the timing
         an, rm = [], []
         for i in range(repeat):   # alternate, so that drift in the machine's load cancels
             s = still.model_copy(update={"time": 3.0 + i})
-            an.append(r.fog_only(s, read=False))
-            rm.append(r.fog_only(s, raymarch_steps=use, read=False))
+            an.append(fog_only(r, s, read=False))
+            rm.append(fog_only(r, s, raymarch_steps=use, read=False))
         t_an, t_rm = statistics.median(an), statistics.median(rm)
         rows.append({"kind": kind, "analytic_ms": t_an, "analytic_max_err": err_an,
                      "raymarch_steps": steps, "raymarch_max_err": errs.get(use),
@@ -170,7 +171,7 @@ def gawron(r: Renderer, repeat: int = 7) -> dict:
             r.ctx.finish()
             return (time.perf_counter() - t0) * 1000
         out[mode] = _median(once, repeat)
-    read_ms = _median(lambda i: _timed(lambda: r._targets_for(1920, 1080).out.read(components=3)), repeat)
+    read_ms = _median(lambda i: _timed(lambda: r.caches.targets(1920, 1080).out.read(components=3)), repeat)
     res = {"fog_ms": out["off"] - read_ms, "single_ms": out["single"] - read_ms,
            "separate_ms": out["separate"] - read_ms, "readback_ms": read_ms}
     res["single_over_separate"] = res["single_ms"] / res["separate_ms"]

@@ -16,7 +16,7 @@ from fogbank.kinds import KINDS
 from fogbank.kinds.packing import enabled, uses_noise, variant
 from fogbank.kinds.particles import sim_seconds as particle_sim_seconds
 from fogbank.model.params import FogParams, StillParams
-from fogbank.render.renderer import GBUFFER_BPP, LINEAR_BPP, MSAA_BPP, OUT_BPP
+from fogbank.render.targets import GBUFFER_BPP, LINEAR_BPP, MSAA_BPP, OUT_BPP
 
 # seconds on the reference machine
 SCENE_FIXED_S = 0.10          # shadow map check, terrain vertex work, programs

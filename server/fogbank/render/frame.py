@@ -1,0 +1,99 @@
+"""What a frame needs from the CPU, prepared apart from the GL work: the view, and the
+fog's plan (particle states simulated, layers packed relative to the eye in float64,
+the fog uniforms). `prepare` makes no GL call, so the renderer runs it on its own thread
+while the GL thread draws the shadow, sky and scene passes, which do not need it.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections import OrderedDict
+from concurrent.futures import Future
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from fogbank.kinds.packing import Packed, direct_density, enabled, pack_layers, uses_noise, variant
+from fogbank.kinds.particle_motion import simulate
+from fogbank.scene import camera as cam
+from fogbank.scene import terrain
+
+SIM_CACHE = 64   # particle states kept (at most 16 layers x 1024 particles each)
+
+
+class Simulations:
+    """Particle states by (layer, time, wind, scene), simulated once and kept in a small
+    LRU (rays at one time, frames of a paused look). Safe to use from two threads."""
+
+    def __init__(self, size: int = SIM_CACHE):
+        self.size = size
+        self._cache: OrderedDict = OrderedDict()
+        self._lock = threading.Lock()
+
+    def state(self, layer, time: float, fog):
+        key = (layer.model_dump_json(), float(time), tuple(fog.wind.vector()), fog.scene)
+        with self._lock:
+            if key in self._cache:
+                self._cache.move_to_end(key)
+                return self._cache[key]
+        ground = terrain.flat if fog.scene == "calibration" else terrain.height
+        state = simulate(layer, time, fog.wind.vector(), ground)
+        with self._lock:
+            self._cache[key] = state
+            while len(self._cache) > self.size:
+                self._cache.popitem(last=False)
+        return state
+
+
+@dataclass
+class FogPlan:
+    """The fog's uniforms for one draw: its layers packed relative to the reference point
+    `ref` at `time`, which programs it needs, and the global fog uniforms."""
+    key: tuple                     # the layers' variant (which fog program)
+    packed: Packed
+    has_particles: bool
+    noise: tuple | None            # the baked noise tile it samples, if any
+    uniforms: dict[str, Any]
+
+    def swarms(self):
+        """(slot, values) of each particle layer, in slot order (the quads pass)."""
+        return [(n, v) for n, (k, v) in enumerate(zip(self.packed.kinds, self.packed.values))
+                if k == "particles"]
+
+
+def plan_fog(fog, time: float, ref, sims: Simulations) -> FogPlan:
+    states = {i: sims.state(l, time, fog) for i, l in enabled(fog) if l.kind == "particles"}
+    e = fog.effects
+    n = fog.noise
+    return FogPlan(
+        key=variant(fog),
+        packed=pack_layers(fog, states, ref, time),
+        has_particles=bool(states),
+        noise=(n.size, n.octaves, n.blur, n.seed) if uses_noise(fog) else None,
+        uniforms={"uStartDistance": e.start_distance, "uCutoffDistance": e.cutoff_distance,
+                  "uMaxOpacity": e.max_opacity, "uDensity": direct_density(fog)},
+    )
+
+
+@dataclass
+class Frame:
+    """One frame on its way through the passes: the inputs, and what each pass leaves
+    for the next (declared in render/passes)."""
+    still: Any                     # StillParams
+    slot: str                      # whose scene pass is cached (a session, or stills)
+    msaa: bool
+    view: cam.View
+    targets: Any                   # render/targets.py Targets
+    gbuffer: Any                   # render/targets.py GBuffer
+    plan: Future                   # FogPlan, prepared off the GL thread
+    scene_key: tuple = ()
+    scene_cached: bool = False
+    raymarch_steps: int | None = None
+    sun_view_proj: np.ndarray | None = None
+    fog_tex: Any = None
+    image: np.ndarray | None = None
+    extra: dict = field(default_factory=dict)
+
+    def fog_plan(self) -> FogPlan:
+        return self.plan.result()

@@ -1,0 +1,31 @@
+"""The frame's passes, in order. Each declares what it reads and what it writes; the
+frame's inputs are the look, the view and the fog plan (render/frame.py).
+
+    shadow     look.sun, meshes              -> shadow_map
+    sky        look.sun, view                -> scene_target
+    scene      meshes, shadow_map, view      -> scene_target, gbuffer (resolved)
+    fog        gbuffer.invdist, fog_plan     -> fog
+    particles  gbuffer.invdist, fog_plan     -> fog (clarity multiplied in)
+    composite  gbuffer.color, gbuffer.invdist, fog -> out (or linear, blur separate)
+    blur       linear                        -> out
+    output     out                           -> image
+"""
+
+from __future__ import annotations
+
+from fogbank.render.passes.base import FRAME_INPUTS, Pass
+from fogbank.render.passes.blur import BlurPass
+from fogbank.render.passes.composite import CompositePass
+from fogbank.render.passes.fog import FogPass
+from fogbank.render.passes.output import OutputPass
+from fogbank.render.passes.particles import ParticlesPass
+from fogbank.render.passes.scene import ScenePass
+from fogbank.render.passes.shadow import ShadowPass
+from fogbank.render.passes.sky import SkyPass
+
+FRAME_PASSES: tuple[Pass, ...] = (
+    ShadowPass(), SkyPass(), ScenePass(), FogPass(), ParticlesPass(), CompositePass(),
+    BlurPass(), OutputPass(),
+)
+
+__all__ = ["FRAME_INPUTS", "FRAME_PASSES", "Pass"]

@@ -1,0 +1,18 @@
+"""A render pass: a name, what it reads and writes, and `run(renderer, frame)`."""
+
+from __future__ import annotations
+
+# what a frame brings before any pass runs
+FRAME_INPUTS = frozenset({"look", "look.sun", "view", "meshes", "fog_plan"})
+
+
+class Pass:
+    name: str = ""
+    reads: tuple[str, ...] = ()
+    writes: tuple[str, ...] = ()
+
+    def run(self, r, f) -> None:   # r: Renderer, f: Frame
+        raise NotImplementedError
+
+    def __repr__(self) -> str:
+        return f"{self.name}({', '.join(self.reads)} -> {', '.join(self.writes)})"

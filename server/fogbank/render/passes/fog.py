@@ -1,0 +1,44 @@
+"""The fog pass (Biri 4.1, 4.2): per texel of the fog target (1/fog_scale of the frame),
+the fog's raw transmittance from the eye to the visible point, and the inverse distance
+used (passes/fog.frag). `bind_fog` sets a fog plan's uniforms on any program that
+includes fog/transmittance.glsl (this pass, and the rays of the transmittance API)."""
+
+from __future__ import annotations
+
+import moderngl
+
+from fogbank.render.gl import TEX, set_uniforms
+from fogbank.render.passes.base import Pass
+
+
+def bind_fog(r, prog, plan) -> None:
+    """Upload a fog plan: the packed layers, the particle rows, the noise tile and the
+    global fog uniforms."""
+    if "uLayer" in prog:   # constant indexing lets the compiler trim the array
+        u = prog["uLayer"]
+        u.write(plan.packed.data[:u.array_length].tobytes())
+    if plan.has_particles:
+        r.particles.write(plan.packed.particles.tobytes())
+    r.particles.use(TEX["uParticles"])
+    (r.noise.get(plan.noise) if plan.noise else r.noise.none()).use(TEX["uNoise"])
+    set_uniforms(prog, plan.uniforms)
+
+
+class FogPass(Pass):
+    name = "fog"
+    reads = ("gbuffer.invdist", "fog_plan", "view")
+    writes = ("fog",)
+
+    def run(self, r, f) -> None:
+        e = f.still.effects
+        fbo, tex = f.targets.fog_target(e.fog_scale)
+        fbo.use()
+        plan = f.fog_plan()
+        prog = r.programs.fog(plan.key, e.fog_scale, f.raymarch_steps)
+        bind_fog(r, prog, plan)
+        v = f.view
+        set_uniforms(prog, {"uFwd": v.fwd, "uRight": v.right, "uUp": v.up,
+                            "uSkyDistance": e.sky_distance})
+        f.gbuffer.invdist.use(TEX["uInvDist"])
+        r.programs.draw(prog, moderngl.TRIANGLES)
+        f.fog_tex = tex

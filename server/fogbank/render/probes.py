@@ -1,0 +1,33 @@
+"""Benchmark hooks, apart from the frame: the scene passes (cached) and the fog pass
+alone, timed, with its raw output read back."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from fogbank.render.passes import FogPass, ParticlesPass, ScenePass, ShadowPass, SkyPass
+
+
+def fog_only(r, still, raymarch_steps: int | None = None, read: bool = True):
+    """The scene passes (cached, slot "bench") and the fog pass (with the particle quads)
+    alone: milliseconds, and with `read` the raw transmittance and inverse distance per
+    fog texel, bottom row first, and the view. With raymarch_steps, the exponential
+    layers are raymarched instead of integrated in closed form."""
+    f = r.begin(still, slot="bench", msaa=True)
+    f.raymarch_steps = raymarch_steps
+    for p in (ShadowPass(), SkyPass(), ScenePass()):
+        p.run(r, f)
+    f.fog_plan()
+    r.ctx.finish()
+    t0 = time.perf_counter()
+    for p in (FogPass(), ParticlesPass()):
+        p.run(r, f)
+    r.ctx.finish()
+    ms = (time.perf_counter() - t0) * 1000.0
+    if not read:
+        return ms
+    tex = f.fog_tex
+    a = np.frombuffer(tex.read(), np.float32).reshape(tex.height, tex.width, 2)
+    return ms, a[..., 0].copy(), a[..., 1].copy(), f.view

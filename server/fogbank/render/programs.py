@@ -1,0 +1,54 @@
+"""The compiled programs of one context, cached by their sources, defines and fog layer
+variant. A fog program's generated includes come from the kinds registry
+(kinds/packing.py); the fixed programs stay, the fog variants are kept to the 48 most
+recent."""
+
+from __future__ import annotations
+
+from collections import OrderedDict
+
+from fogbank.kinds.packing import DEFINES, generated
+from fogbank.render.gl import TEX, set_uniform
+from fogbank.render.glsl import program
+
+FULLSCREEN = "passes/fullscreen.vert"
+MAX_VARIANTS = 48
+
+
+class Programs:
+    def __init__(self, ctx):
+        self.ctx = ctx
+        self._cache: OrderedDict = OrderedDict()
+        self.vaos: dict = {}   # program -> its empty vertex array (attribute-less draws)
+
+    def get(self, vert: str, frag: str, layers: tuple | None = None, inline_particles: bool = True,
+            **defines):
+        key = (vert, frag, layers, inline_particles, tuple(sorted(defines.items())))
+        if key in self._cache:
+            self._cache.move_to_end(key)
+            return self._cache[key]
+        gen = generated(layers, inline_particles) if layers is not None else None
+        all_defines = {**DEFINES, **defines}
+        prog = program(self.ctx, vert, frag, all_defines, gen)
+        for name, unit in TEX.items():
+            if name in prog.extra["declared"]:
+                set_uniform(prog, name, unit)
+        self.vaos[prog] = self.ctx.vertex_array(prog, [])
+        self._cache[key] = prog
+        variants = [k for k in self._cache if k[2] is not None]
+        for k in variants[:max(0, len(variants) - MAX_VARIANTS)]:
+            old = self._cache.pop(k)
+            self.vaos.pop(old).release()
+            old.release()
+        return prog
+
+    def draw(self, prog, mode, vertices: int = 3, instances: int = 1) -> None:
+        """An attribute-less draw (a fullscreen triangle, or instanced quads)."""
+        self.vaos[prog].render(mode, vertices=vertices, instances=instances)
+
+    def fog(self, layers: tuple, scale: int, raymarch_steps: int | None = None):
+        """The fog pass; particles are left to the quads pass. With raymarch_steps, the
+        exponential layers are raymarched instead (the benchmark's comparison)."""
+        extra = {"RAYMARCH_STEPS": raymarch_steps} if raymarch_steps else {}
+        return self.get(FULLSCREEN, "passes/fog.frag", layers, inline_particles=False,
+                        FOG_SCALE=scale, **extra)

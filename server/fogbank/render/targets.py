@@ -1,0 +1,139 @@
+"""Render targets: the scratch targets of one frame size, and the cached scene pass
+(G-buffer) of one slot and size, each in a byte-budgeted LRU (render/cache.py)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import moderngl
+
+from fogbank.render.cache import ByteLRU
+from fogbank.render.gl import release_fbo
+
+MSAA_SAMPLES = 4
+# bytes per pixel of each GPU allocation (for the caches' byte budgets and the cost model)
+OUT_BPP = 4                                   # RGBA8 output renderbuffer
+MSAA_BPP = MSAA_SAMPLES * (8 + 4 + 4)         # RGBA16F + R32F + depth24/stencil8, per sample
+LINEAR_BPP = 2 * 8                            # two RGBA16F blur targets
+GBUFFER_BPP = 8 + 4 + 4                       # RGBA16F colour, R32F inverse distance, depth
+
+
+@dataclass
+class Targets:
+    """Scratch render targets for one frame size, shared by every caller (one frame is
+    drawn at a time by a worker). The MSAA, fog and blur targets are made on first use."""
+    ctx: moderngl.Context
+    size: tuple[int, int]
+    out: moderngl.Framebuffer
+    msaa_fbo: moderngl.Framebuffer | None = None
+    fog: dict[int, tuple[moderngl.Framebuffer, moderngl.Texture]] = field(default_factory=dict)
+    linear: list[tuple[moderngl.Framebuffer, moderngl.Texture]] = field(default_factory=list)
+
+    def nbytes(self) -> int:
+        w, h = self.size
+        n = w * h * OUT_BPP
+        if self.msaa_fbo is not None:
+            n += w * h * MSAA_BPP
+        for scale in self.fog:
+            n += -(-w // scale) * -(-h // scale) * 8
+        n += len(self.linear) * w * h * 8
+        return n
+
+    def release(self) -> None:
+        for fbo in [self.out, self.msaa_fbo] + [f for f, _ in self.fog.values()] + [f for f, _ in self.linear]:
+            release_fbo(fbo)
+        self.fog.clear()
+        self.linear.clear()
+        self.msaa_fbo = None
+
+    def msaa(self) -> moderngl.Framebuffer:
+        """Colour (RGBA16F), inverse distance (R32F) and depth, MSAA_SAMPLES per pixel."""
+        if self.msaa_fbo is None:
+            ctx, size = self.ctx, self.size
+            self.msaa_fbo = ctx.framebuffer(
+                color_attachments=[ctx.renderbuffer(size, 4, samples=MSAA_SAMPLES, dtype="f2"),
+                                   ctx.renderbuffer(size, 1, samples=MSAA_SAMPLES, dtype="f4")],
+                depth_attachment=ctx.depth_renderbuffer(size, samples=MSAA_SAMPLES))
+        return self.msaa_fbo
+
+    def fog_target(self, scale: int):
+        """(framebuffer, texture) of (raw T, 1/distance) at 1/scale of the frame."""
+        if scale not in self.fog:
+            w, h = self.size
+            tex = self.ctx.texture((-(-w // scale), -(-h // scale)), 2, dtype="f4")
+            tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+            self.fog[scale] = (self.ctx.framebuffer(color_attachments=[tex]), tex)
+        return self.fog[scale]
+
+    def linear_pair(self):
+        """Two RGBA16F targets for the separate blur passes."""
+        while len(self.linear) < 2:
+            tex = self.ctx.texture(self.size, 4, dtype="f2")
+            tex.repeat_x = tex.repeat_y = False
+            self.linear.append((self.ctx.framebuffer(color_attachments=[tex]), tex))
+        return self.linear
+
+
+@dataclass
+class GBuffer:
+    """A cached scene pass (colour and inverse distance) for one slot (a streaming session,
+    or stills) and size; redrawn only when scene, camera, sun or MSAA change."""
+    fbo: moderngl.Framebuffer      # colour + inverse distance + single-sample depth
+    color: moderngl.Texture
+    invdist: moderngl.Texture
+    scene_key: object = None
+
+    def nbytes(self) -> int:
+        return self.color.width * self.color.height * GBUFFER_BPP
+
+    def release(self) -> None:
+        release_fbo(self.fbo)   # colour, inverse distance and the depth renderbuffer
+
+
+class TargetCache:
+    """Scratch targets by size and scene passes by (slot, size), half the byte budget
+    each. Every release happens with a never-released 1x1 framebuffer bound: releasing
+    the bound framebuffer leaves GL_INVALID_OPERATION behind (moderngl)."""
+
+    def __init__(self, ctx: moderngl.Context, budget: int):
+        self.ctx = ctx
+        self._targets = ByteLRU(budget // 2)    # (w, h) -> Targets
+        self._gbuffers = ByteLRU(budget // 2)   # (slot, w, h) -> GBuffer
+        self.park_fbo = ctx.framebuffer(color_attachments=[ctx.renderbuffer((1, 1), 4)])
+
+    def park(self) -> None:
+        self.park_fbo.use()
+
+    def targets(self, w: int, h: int) -> Targets:
+        return self._targets.get((w, h), lambda: Targets(
+            self.ctx, (w, h), self.ctx.framebuffer(color_attachments=[self.ctx.renderbuffer((w, h), 4)])))
+
+    def gbuffer(self, slot: str, w: int, h: int) -> GBuffer:
+        def make() -> GBuffer:
+            ctx = self.ctx
+            color = ctx.texture((w, h), 4, dtype="f2")
+            color.repeat_x = color.repeat_y = False
+            invdist = ctx.texture((w, h), 1, dtype="f4")
+            invdist.filter = (moderngl.NEAREST, moderngl.NEAREST)
+            fbo = ctx.framebuffer(color_attachments=[color, invdist],
+                                  depth_attachment=ctx.depth_renderbuffer((w, h)))
+            return GBuffer(fbo, color, invdist)
+        return self._gbuffers.get((slot, w, h), make)
+
+    def trim(self, keep_targets=(), keep_gbuffers=()) -> None:
+        self.park()
+        self._targets.trim(keep_targets)
+        self._gbuffers.trim(keep_gbuffers)
+
+    def nbytes(self) -> int:
+        return self._targets.nbytes() + self._gbuffers.nbytes()
+
+    def clear(self) -> None:
+        self.park()
+        self._targets.clear()
+        self._gbuffers.clear()
+
+    def drop_slot(self, slot: str) -> None:
+        self.park()
+        for key in [k for k in self._gbuffers.keys() if k[0] == slot]:
+            self._gbuffers.pop(key)
