@@ -20,7 +20,9 @@ import annotated_types as at
 import numpy as np
 from pydantic import BaseModel, ValidationError
 
-from fogbank.model.params import LAYER_CLASSES, POSITION_LIMIT, RAY_LIMIT, FogParams, Position
+from fogbank.model.params import LAYER_CLASSES, FogParams
+
+from fogbank.model.fields import POSITION_LIMIT, RAY_LIMIT, Position
 
 SCENE_POSITION = 500.0      # scene scale: every position within +-500 m ...
 SCENE_LENGTH = 2000.0       # ... rays up to 2 km ...

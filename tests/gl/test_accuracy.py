@@ -20,6 +20,7 @@ from fogbank.kinds.noise_bake import bake
 from fogbank.model.params import LAYER_CLASSES, FogParams
 from fogbank.kinds.height import Height
 from fogbank.model.presets import preset_dict
+from draws import unit
 from quadrature import check, compose, noise_bound, truth
 
 KINDS = sorted(LAYER_CLASSES)
@@ -129,6 +130,43 @@ def test_sphere_seen_from_far_away(client, R):
             O.append(eye), W.append(aim / np.linalg.norm(aim)), D.append(2 * k * R)
     got, want = _compare(client, fog, np.array(O), np.array(W), np.array(D), 2e-4)
     assert want[0] == pytest.approx(math.exp(-1), abs=1e-9)
+
+
+def test_rotated_box_far_from_the_origin_and_thin(client):
+    """A box 9 km from the origin, 0.2 m thin and turned on all three axes, crossed from
+    near and far: the slab method works in the box's frame relative to the eye."""
+    c = np.array([9000.0, -3000.0, 7000.0])
+    fog = FogParams(layers=[{"kind": "box", "center": c.tolist(), "half_size": (30.0, 0.1, 12.0),
+                             "yaw": 33.0, "pitch": -21.0, "roll": 47.0, "density": 4.0}],
+                    scene="calibration")
+    rng = np.random.default_rng(5)
+    O, W, D = [], [], []
+    for dist in (5.0, 60.0, 900.0):
+        for _ in range(6):
+            eye = c + dist * unit(rng.normal(size=3))
+            aim = c + rng.normal(size=3) * 4.0 - eye
+            O.append(eye), W.append(unit(aim)), D.append(2.0 * np.linalg.norm(aim))
+    got, want = _compare(client, fog, np.array(O), np.array(W), np.array(D), 2e-4)
+    assert want.min() < 0.9   # rays cross the slab
+
+
+def test_needle_ellipsoid_along_and_across(client):
+    """An ellipsoid of radii 0.3 x 0.3 x 400 m (a 1300:1 needle), crossed along its axis
+    and across it: the metric's scale m spans 1/400 to 1/0.3."""
+    c = np.array([-200.0, 40.0, 500.0])
+    fog = FogParams(layers=[{"kind": "ellipsoid", "center": c.tolist(), "radii": (0.3, 0.3, 400.0),
+                             "yaw": 10.0, "pitch": 5.0, "density": 3.0}], scene="calibration")
+    axis = unit(np.array([np.sin(np.radians(10)) * np.cos(np.radians(5)), np.sin(np.radians(5)),
+                          np.cos(np.radians(10)) * np.cos(np.radians(5))]))
+    O, W, D = [], [], []
+    for off in (0.0, 0.1, 0.25):
+        side = unit(np.cross(axis, [0.0, 1.0, 0.0]))
+        eye = c - 600.0 * axis + off * side                   # along the needle
+        O.append(eye), W.append(axis), D.append(1200.0)
+        eye = c + 50.0 * side + 100.0 * axis + off * np.cross(side, axis)   # across it
+        O.append(eye), W.append(-side), D.append(100.0)
+    got, want = _compare(client, fog, np.array(O), np.array(W), np.array(D), 2e-4)
+    assert want.min() < 0.5
 
 
 def test_sharp_potential_seen_from_200_m(client):

@@ -10,7 +10,8 @@ import pytest
 from fogbank.scene import camera as cam
 from fogbank.scene import meshes as scenes
 from fogbank.kinds.reference import transmittance as reference
-from fogbank.model.params import StillParams, srgb_to_linear
+from fogbank.model.params import StillParams
+from fogbank.model.fields import srgb_to_linear
 
 W, H = 320, 180
 

@@ -12,7 +12,7 @@ import re
 
 import numpy as np
 import pytest
-from pydantic import BaseModel, ValidationError
+from pydantic import ValidationError
 
 from draws import ALL, random_layer
 from fogbank.kinds import KINDS

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from typing import Literal
 
 import numpy as np
@@ -14,6 +13,7 @@ from fogbank.kinds.reduce import EXACT_ABOVE, phase_at
 from fogbank.model.fields import LayerBase, Strict, Wave, num
 
 MAX_COSINE_TERMS = 8
+
 
 class CosineTerm(Strict):
     amp: float = num(0.5, -10, 10, 0.01, "", "amplitude c_i")

@@ -9,12 +9,13 @@ import numpy as np
 from numpy.polynomial import polynomial as npoly
 from pydantic import Field, model_validator
 
-from fogbank.kinds.kind import Kind, Layout, exponential
+from fogbank.kinds.kind import Kind, Layout
 from fogbank.kinds.rays import slide
 from fogbank.kinds.reduce import EXACT_ABOVE, coordinate_at, taylor_shift
 from fogbank.model.fields import LayerBase, Num, Wave, num
 
 MAX_POLY_COEFFS = 8
+
 
 def poly_min(coeffs: list[float], lo: float, hi: float) -> float:
     """Minimum of sum coeffs[i] u^i on [lo, hi] (endpoints and real critical points)."""

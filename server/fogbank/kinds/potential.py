@@ -12,6 +12,7 @@ from fogbank.kinds.kind import Kind, Layout, exponential
 from fogbank.kinds.rays import slide
 from fogbank.model.fields import Direction, LayerBase, Position, num
 
+
 class Potential(LayerBase):
     """Biri 3.2.3, eq. 9: strength / (c + e r^2), r the distance to a point or a line."""
     kind: Literal["potential"] = "potential"

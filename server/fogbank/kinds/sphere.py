@@ -11,6 +11,7 @@ from fogbank.kinds.kind import Kind, Layout, exponential
 from fogbank.kinds.rays import slide
 from fogbank.model.fields import LayerBase, Position, num
 
+
 class Sphere(LayerBase):
     """Quilez: density * max(0, 1 - |x - center|^2 / radius^2)."""
     kind: Literal["sphere"] = "sphere"

@@ -17,9 +17,8 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from fogbank.kinds import KINDS
-from fogbank.model.fields import (MAX_LAYERS, MAX_PARTICLES, POSITION_LIMIT, RAY_LIMIT,  # noqa: F401
-                                  Bool, Color, Coord, Direction, Int, LayerBase, Position, Strict,
-                                  num, srgb_to_linear)
+from fogbank.model.fields import MAX_LAYERS, MAX_PARTICLES, POSITION_LIMIT, Color, Int, Position, Strict, num
+
 
 MAX_PIXELS = 16_000_000
 

@@ -9,7 +9,7 @@ change. The transmittance API (render/rays.py) shares the programs and the fog p
 
 from __future__ import annotations
 
-from concurrent.futures import Future, ThreadPoolExecutor
+from concurrent.futures import ThreadPoolExecutor
 
 import moderngl
 import numpy as np
@@ -20,8 +20,7 @@ from fogbank.render.passes import FRAME_PASSES
 from fogbank.render.programs import FULLSCREEN, Programs
 from fogbank.render.rays import RayCaster
 from fogbank.render.resources import Meshes, NoiseTiles, ShadowMap, particle_texture
-from fogbank.render.targets import (GBUFFER_BPP, LINEAR_BPP, MSAA_BPP, OUT_BPP,  # noqa: F401
-                                    TargetCache)
+from fogbank.render.targets import TargetCache
 from fogbank.scene import camera as cam
 
 CACHE_BYTES = 256 << 20   # default byte budget of the GL caches (targets and scene passes)
@@ -103,9 +102,3 @@ class Renderer:
         """Free a slot's cached scene passes (a session ended)."""
         self.caches.drop_slot(slot)
 
-
-def done(value) -> Future:
-    """A finished future (a fog plan made on the calling thread)."""
-    f: Future = Future()
-    f.set_result(value)
-    return f

@@ -16,7 +16,7 @@ from functools import lru_cache
 import numpy as np
 
 from fogbank.scene import terrain
-from fogbank.scene.landmarks import HOUSE, landmarks, tree_spots  # noqa: F401
+from fogbank.scene.landmarks import HOUSE, tree_spots
 from fogbank.model.fields import srgb_to_linear
 
 VERTEX_FLOATS = 10

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import math
 import logging
 from collections import OrderedDict
 from contextlib import asynccontextmanager
@@ -33,7 +32,8 @@ from fogbank.workers import worker
 from fogbank.model import presets as P
 from fogbank.render.encode import MEDIA_TYPES
 from fogbank.service.limits import RequestLimits
-from fogbank.model.params import RAY_LIMIT, Direction, FogParams, Position, StillParams, Strict
+from fogbank.model.params import FogParams, StillParams
+from fogbank.model.fields import RAY_LIMIT, Direction, Position, Strict
 from fogbank.service.security import SecurityHeaders, origin_allowed
 from fogbank.workers.supervisor import Supervisor, WorkerError
 from fogbank.settings import Settings, get_settings

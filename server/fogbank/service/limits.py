@@ -8,8 +8,6 @@ to `MAX_HEAD_BYTES`; below that, these checks answer in JSON.
 
 from __future__ import annotations
 
-import json
-
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from fogbank.model import errors

@@ -14,7 +14,9 @@ from typing import Any
 from fastapi.openapi.utils import get_openapi
 
 from fogbank.model import presets as P
-from fogbank.model.params import MAX_PARTICLES, FogParams, StillParams
+from fogbank.model.params import FogParams, StillParams
+from fogbank.model.fields import MAX_PARTICLES
+
 
 RULES = (
     "Rules across fields (each refused with a 422 naming the field): a cosine layer's c0 is at "

@@ -50,6 +50,7 @@ def _cpu() -> str:
 
 # ---------------------------------------------------------------- 1: analytic vs raymarched
 
+
 def _kind_looks() -> dict[str, StillParams]:
     """One representative layer per exponential kind, from the presets, default camera."""
     def first(preset, kind):
@@ -154,6 +155,7 @@ def biri_table1(r: Renderer, repeat: int = 5) -> list[dict]:
 
 # ---------------------------------------------------------------- 3: Gawron Tables 2 and 3
 
+
 def gawron(r: Renderer, repeat: int = 7) -> dict:
     """1920x1080: the fog pass alone, fog + blur fused (single pass), fog + blur as
     separate passes; ms each, GPU work timed with glFinish around the passes."""
@@ -188,6 +190,7 @@ def _timed(f) -> float:
 
 
 # ---------------------------------------------------------------- 4-6: the service
+
 
 def streaming(r: Renderer, srv: ChildServer, seconds: float) -> list[dict]:
     from fogbank.tools.bench_stream import control_latency, delivered_fps
@@ -303,6 +306,7 @@ def process_boundary(n: int = 300) -> dict:
 
 
 # ---------------------------------------------------------------- report
+
 
 def run(out_dir: str = "docs", quick: bool = False) -> dict:
     r = Renderer(create_context())
