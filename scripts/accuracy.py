@@ -25,8 +25,9 @@ sys.path[:0] = [str(ROOT / "tests"), str(ROOT / "server")]
 from cases import draw_case  # noqa: E402
 from quadrature import check, compose, noise_bound  # noqa: E402
 
-KINDS = ["homogeneous", "height", "cosine", "polynomial", "potential", "sphere",
-         "particles", "noise", "distance"]
+from fogbank.kinds import KINDS as REGISTRY  # noqa: E402
+
+KINDS = list(REGISTRY)   # every registered kind
 
 
 def glsl(post, fog, O, W, D, t):

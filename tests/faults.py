@@ -6,15 +6,15 @@ from __future__ import annotations
 
 def break_sphere_shaders() -> dict:
     """From now on, fog programs with a sphere layer fail to compile in this worker."""
-    import fogbank.render.renderer as R
-    real = R.layer_code
+    import fogbank.render.programs as programs
+    real = programs.generated
 
     def broken(key, inline_particles=True):
         code = real(key, inline_particles)
         if any(k == "sphere" for k, _ in key):
-            code += "this is not GLSL;\n"
+            code["fog/layers.gen.glsl"] += "this is not GLSL;\n"
         return code
-    R.layer_code = broken
+    programs.generated = broken
     return {}
 
 
