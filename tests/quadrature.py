@@ -178,30 +178,35 @@ def tau_sphere(layer, fog, O, w, d, time):
 # ------------------------------------------------------------------ bodies (box, ellipsoid)
 
 
-def body_frame(layer, x):
-    """Points x in the body's frame: yaw about +y, then pitch about the body's x, then roll
+def body_frame(layer):
+    """x -> x in the body's frame: yaw about +y, then pitch about the body's x, then roll
     about its z (intrinsic Y-X'-Z''), written here with scipy's rotations."""
     from scipy.spatial.transform import Rotation
     rot = Rotation.from_euler("YXZ", [layer.yaw, layer.pitch, layer.roll], degrees=True)
-    return rot.inv().apply(np.atleast_2d(np.asarray(x, dtype=np.float64) - np.asarray(layer.center)))
+    to_body = rot.inv().as_matrix()
+    c = np.asarray(layer.center, dtype=np.float64)
+    return lambda x: to_body @ (np.asarray(x, dtype=np.float64) - c)
 
 
-def body_level(layer, x) -> float:
-    """< 0 inside the body, > 0 outside; convex along any line (the box's largest excess
-    over a half extent, the ellipsoid's r^2 - 1)."""
-    p = body_frame(layer, x)[0]
+def body_level(layer):
+    """x -> < 0 inside the body, > 0 outside; convex along any line (the box's largest
+    excess over a half extent, the ellipsoid's r^2 - 1)."""
+    frame = body_frame(layer)
     if layer.kind == "box":
-        return float(np.max(np.abs(p) - np.asarray(layer.half_size)))
-    return float(np.sum((p / np.asarray(layer.radii)) ** 2) - 1.0)
+        h = np.asarray(layer.half_size, dtype=np.float64)
+        return lambda x: float(np.max(np.abs(frame(x)) - h))
+    a = np.asarray(layer.radii, dtype=np.float64)
+    return lambda x: float(np.sum((frame(x) / a) ** 2) - 1.0)
 
 
-def body_crossings(layer, O, w, d, iters=200) -> list[float]:
+def body_crossings(layer, O, w, d, iters=120) -> list[float]:
     """Where O + w s, s in [0, d], enters and leaves the body (O in the body's unslid
     frame): the convex level's minimum by golden sections, then its zeros by bisection."""
     O, w = np.asarray(O, dtype=np.float64), np.asarray(w, dtype=np.float64)
+    level = body_level(layer)
 
     def f(s):
-        return body_level(layer, O + w * s)
+        return level(O + w * s)
 
     lo, hi, g = 0.0, float(d), (math.sqrt(5) - 1) / 2
     for _ in range(iters):
@@ -227,19 +232,15 @@ def body_crossings(layer, O, w, d, iters=200) -> list[float]:
 def tau_body(layer, fog, O, w, d, time):
     """A box's or an ellipsoid's optical depth (signed: a negative density carves)."""
     Os = slid(layer, fog, O, time)
-    cuts = body_crossings(layer, Os, w, d)
-
-    def f_inside(s):
-        return body_level(layer, Os + w * s) <= 0
-
-    edges = [0.0] + cuts + [float(d)]
+    level = body_level(layer)
+    edges = [0.0] + body_crossings(layer, Os, w, d) + [float(d)]
     total = 0.0
     for a, b in zip(edges[:-1], edges[1:]):
-        if b > a and f_inside((a + b) / 2):
+        if b > a and level(Os + w * (a + b) / 2) <= 0:
             if layer.kind == "box":
                 total += _quad(lambda s: layer.density, a, b)
             else:
-                total += _quad(lambda s: layer.density * max(0.0, -body_level(layer, Os + w * s)), a, b)
+                total += _quad(lambda s: layer.density * max(0.0, -level(Os + w * s)), a, b)
     return total
 
 
