@@ -16,6 +16,9 @@ def pytest_collection_modifyitems(config, items):
         if tier not in TIERS:
             raise pytest.UsageError(f"{item.nodeid}: a test lives in tests/<tier>/, tier one of {TIERS}")
         item.add_marker(getattr(pytest.mark, tier))
+    # fast tiers first; the browser tier last, since Playwright's sync API keeps an event
+    # loop running on the main thread for the rest of the session (asyncio.run fails after)
+    items.sort(key=lambda item: TIERS.index(Path(str(item.fspath)).parent.name))
 
 
 @pytest.fixture(scope="session")
