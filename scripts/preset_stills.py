@@ -38,7 +38,7 @@ def save(path: str) -> None:
     print(f"{path}: {len(imgs)} stills")
 
 
-def compare(a_path: str, b_path: str) -> None:
+def compare(a_path: str, b_path: str) -> int:
     a, b = np.load(a_path), np.load(b_path)
     common = sorted(set(a.files) & set(b.files))
     worst = 0
@@ -49,10 +49,12 @@ def compare(a_path: str, b_path: str) -> None:
         worst = max(worst, d)
     print(f"{len(common)} stills in both, max |difference| {worst}/255; only in the first: "
           f"{sorted(set(a.files) - set(b.files))}; only in the second: {sorted(set(b.files) - set(a.files))}")
+    # a still missing from the second, or one more than 1/255 apart, fails
+    return 1 if worst > 1 or set(a.files) - set(b.files) else 0
 
 
 if __name__ == "__main__":
     if sys.argv[1] == "save":
         save(sys.argv[2])
     else:
-        compare(sys.argv[2], sys.argv[3])
+        sys.exit(compare(sys.argv[2], sys.argv[3]))

@@ -32,7 +32,7 @@ def tune_density(fog, parts, rng):
     """Most looks get the global density (a field like any other, in [0, 20]) that brings
     the median ray's optical depth near 1, so that the rays land where T is neither 0 nor 1
     and an error can show; the rest keep the density they were drawn with."""
-    taus = [max(math.exp(min(p[0], 700.0)) + p[2] - p[1], 0.0) for p in parts if p is not None]
+    taus = [max(math.exp(min(p[0], 700.0)) + p[2], 0.0) - p[1] for p in parts if p is not None]
     taus = [x for x in taus if math.isfinite(x) and x > 0]
     if not taus or rng.random() < 0.25:
         return fog

@@ -378,10 +378,11 @@ def compose(fog, d, parts):
     if fog.density == 0:
         return 1.0
     log_tau, log_direct, signed = parts
-    x = (math.exp(min(math.log(fog.density) + log_tau, 700.0)) + fog.density * signed
+    # the exponential layers' depth is kept at 0 or more (a carving body removes fog, never
+    # adds light); the direct layers (particles, distance fog) are not carved
+    x = (max(math.exp(min(math.log(fog.density) + log_tau, 700.0)) + fog.density * signed, 0.0)
          - fog.density * log_direct)
-    # the total optical depth is kept at 0 or more (a carving body removes fog, never adds light)
-    T = math.exp(-max(x, 0.0)) if math.isfinite(x) else 0.0
+    T = math.exp(-x) if math.isfinite(x) else 0.0
     return max(T, 1.0 - e.max_opacity)
 
 

@@ -323,3 +323,33 @@ def test_particle_quads_match_the_reference_at_every_fog_texel(renderer):
     err = np.abs(T.ravel() - want)
     assert float(err.max()) <= 2e-4
     assert float(np.ptp(want)) > 0.3   # the particles cover part of the view: the check has teeth
+
+
+def test_a_carved_frame_equals_its_rays_and_the_reference(renderer):
+    """A carving ellipsoid around chimney-like smoke in homogeneous fog: the frame (fog
+    pass, then the particle quads multiplied in) equals the rays API (particles inline)
+    and the float64 reference, since a carving body takes depth from the exponential
+    layers only, never from the direct ones."""
+    from fogbank.kinds.particle_motion import simulate
+    from fogbank.render.probes import fog_only
+    from fogbank.scene import terrain
+    still = calibration_still(time=4.0, layers=[
+        {"kind": "homogeneous", "density": 0.01},
+        {"kind": "ellipsoid", "center": (0.0, 4.0, -40.0), "radii": (18.0, 10.0, 14.0), "density": -0.2},
+        {"kind": "particles", "count": 200, "emitter": (0.0, 1.0, -40.0), "spread": 60.0, "speed": 2.0,
+         "radius": 4.0, "alpha": 0.6, "life_min": 30, "life_max": 60}])
+    _, T, invd, view = fog_only(renderer, still)
+    h, w = T.shape
+    py, px = np.mgrid[0:h, 0:w]
+    dirs = hand_rays(still.camera, px.ravel(), py.ravel(), w, h)
+    d = np.where(invd.ravel() > 0, 1.0 / np.maximum(invd.ravel().astype(np.float64), 1e-30),
+                 still.effects.sky_distance)
+    fog = still.fog()
+    eye = np.broadcast_to(view.eye, dirs.shape)
+    rays = renderer.transmittance(fog, eye, dirs, d, np.full(len(d), fog.time))
+    state = simulate(fog.layers[2], fog.time, fog.wind.vector(), terrain.flat)
+    want = reference(fog, eye, dirs, d, fog.time, states={2: state})
+    assert float(np.abs(T.ravel() - rays).max()) <= 2e-4
+    assert float(np.abs(T.ravel() - want).max()) <= 2e-4
+    carved = want[np.abs(want - 1.0) > 1e-3]
+    assert float(np.ptp(want)) > 0.3 and len(carved) > 100   # fog, smoke and a clearing in view

@@ -28,7 +28,7 @@ class Oriented(LayerBase):
     the body's x, then roll about its z), shared by the box and the ellipsoid."""
     center: Position = Field((0.0, 6.0, 0.0), description="m")
     yaw: float = num(0.0, -360, 360, 1, "deg", "turn about the vertical; positive turns +z toward +x")
-    pitch: float = num(0.0, -180, 180, 1, "deg", "tilt about the body's x axis")
+    pitch: float = num(0.0, -180, 180, 1, "deg", "tilt about the body's x axis; positive tips its +y toward +z")
     roll: float = num(0.0, -180, 180, 1, "deg", "turn about the body's z axis")
     density: float = num(0.1, -10, 10, 0.001, "1/m",
                          "density inside; negative carves fog out (the total optical depth stays >= 0)")

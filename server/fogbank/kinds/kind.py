@@ -20,6 +20,7 @@ import numpy as np
 # (GL_MAX_FRAGMENT_UNIFORM_COMPONENTS >= 1024) with room for the passes' own uniforms.
 LAYER_VEC4 = 12
 SWIZZLE = "xyzw"
+RESERVED = frozenset({"base", "at", "group", "format"})   # Refs' own attributes
 
 
 class SlotError(ValueError):
@@ -61,6 +62,9 @@ class Layout:
         vec, comp = 0, 0
         for spec in slots:
             name, size, count = (*spec, 1) if len(spec) == 2 else spec
+            if name in RESERVED or name.startswith("_") or not name.isidentifier():
+                raise SlotError(f"kind {kind!r}: {name!r} cannot name a slot (reserved: "
+                                f"{', '.join(sorted(RESERVED))})")
             if not 1 <= size <= 4 or count < 1 or (count > 1 and size not in (1, 4)):
                 raise SlotError(f"kind {kind!r}: slot {name!r} has size {size} x {count}; "
                                 "a slot is 1-4 floats, an array is of floats or vec4s")
@@ -128,8 +132,8 @@ class Refs:
         return f"uLayer[{self.base + s.vec + k}]"
 
     def format(self, template: str) -> str:
-        return template.format(**{n: getattr(self, n) for n in self._layout.slots
-                                  if self._layout.slots[n].count == 1})
+        return template.format(**{n: s.ref(self.base) for n, s in self._layout.slots.items()
+                                  if s.count == 1})
 
 
 @dataclass
@@ -173,8 +177,8 @@ def exponential(template: str) -> Callable:
 def direct(template: str) -> Callable:
     """GLSL for a kind whose layer has a transmittance T_j (not an exponential of a linear
     optical depth), given as its opacity 1 - T_j: it adds density * -log T_j
-    (common/math.glsl directDepth)."""
-    return lambda refs, variant: f"tau += directDepth({refs.format(template)}, uDensity);"
+    (common/math.glsl directDepth) to tauDirect, which no carving body reduces."""
+    return lambda refs, variant: f"tauDirect += directDepth({refs.format(template)}, uDensity);"
 
 
 @dataclass(frozen=True)
@@ -194,6 +198,10 @@ class Kind:
     cpu_only: frozenset = frozenset()      # fields that never reach the GPU data (by design)
     uses_noise: bool = False               # samples the baked noise tile
     quads: bool = False                    # drawn by its own pass, not in the fog pass
+    # a kind whose GPU data comes from a CPU simulation: (layer, time, fog) -> its state,
+    # handed to `pack` as packing.states[layer index]; and its cost in seconds
+    simulate: Callable | None = None
+    simulate_seconds: Callable[[Any], float] = lambda layer: 0.0
     seconds_per_mpx: float = 0.04          # fog pass cost per megapixel (reference machine)
     extra_seconds: Callable[[Any, float], float] = lambda layer, fog_mpx: 0.0
     describe: Callable[[Any], str] = lambda layer: layer.kind

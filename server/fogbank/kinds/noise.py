@@ -66,7 +66,7 @@ def optical_depth(layer, O, omega, d, t, env):
 def pack(layer, p):
     n = p.fog.noise
     return {"density": p.density * layer.density, "inv_scale": 1.0 / layer.scale,
-            "volume": 1.0 if layer.mode == "volume" else 0.0, "samples": layer.samples,
+            "samples": layer.samples,
             "falloff": 1.0 if layer.height_falloff else 0.0,
             "inv_falloff_scale": 1.0 / layer.falloff_scale,
             "offset": np.mod(p.slid(layer) / layer.scale, 1.0),   # E in tiles, mod 1 (float64)
@@ -97,7 +97,7 @@ def extra_seconds(layer, fog_mpx):
 
 KIND = Kind(
     model=Noise,
-    layout=Layout("noise", ("density", 1), ("inv_scale", 1), ("volume", 1), ("samples", 1),
+    layout=Layout("noise", ("density", 1), ("inv_scale", 1), ("samples", 1),
                   ("falloff", 1), ("inv_falloff_scale", 1), ("offset", 3), ("steps", 3)),
     pack=pack, code=code, sample=sample, optical_depth=optical_depth,
     variant=lambda layer: (layer.mode,), uses_noise=True, seconds_per_mpx=0.05,

@@ -75,7 +75,7 @@ def code(r, variant):
     # one particle per texel of uParticles; the fog pass leaves this to the quads pass
     return (f"for (int j = 0; j < int({r.count}); ++j) {{ "
             f"vec4 q = texelFetch(uParticles, ivec2(int({r.first}) + j, 0), 0); "
-            f"tau += directDepth(particleOpacity(Os, w, ds, q.xyz, {r.radius}, q.w, {r.alpha}), "
+            f"tauDirect += directDepth(particleOpacity(Os, w, ds, q.xyz, {r.radius}, q.w, {r.alpha}), "
             f"uDensity); }}")
 
 
@@ -95,6 +95,14 @@ PARTICLE_S_PER_MPX = 0.0011      # one particle quad of radius 20 m, per megapix
 PARTICLE_SIM_S = 0.5             # simulating 1024 particles of life 128 steps, once per time
 
 
+def simulate_state(layer, time: float, fog):
+    """Fischer's particles at `time` over the look's ground (kinds/particle_motion.py)."""
+    from fogbank.kinds.particle_motion import simulate
+    from fogbank.scene import terrain
+    ground = terrain.flat if fog.scene == "calibration" else terrain.height
+    return simulate(layer, time, fog.wind.vector(), ground)
+
+
 def sim_seconds(layer) -> float:
     return PARTICLE_SIM_S * layer.count / 1024 * layer.life_max / 128
 
@@ -109,6 +117,7 @@ KIND = Kind(
     layout=Layout("particles", ("alpha", 1), ("radius", 1), ("first", 1), ("count", 1)),
     pack=pack, code=code, sample=sample, log_transmittance=reference,
     quads=True, seconds_per_mpx=0.0, extra_seconds=extra_seconds,
+    simulate=simulate_state, simulate_seconds=sim_seconds,
     describe=lambda layer: f"particles, {layer.count} of radius {layer.radius:g} m",
     jit_units=lambda variant: 0.0,
 )

@@ -1,8 +1,8 @@
 """A whole fog's transmittance along rays in float64, composed as the shader composes it.
 
-T = exp(-max(density sum tau_i - density sum log T_j, 0)) (the density scales the optical
-depth before the exponential; a carving body's negative depth never takes the total below
-0), with the global effects applied as in
+T = exp(-(max(density sum tau_i, 0) - density sum log T_j)) (the density scales the
+optical depth before the exponential; a carving body's negative depth never takes the
+exponential layers' sum below 0, and does not carve the direct layers), with the global effects applied as in
 render/shaders/fog/transmittance.glsl: the segment starts at `start_distance`, points
 beyond `cutoff_distance` get no fog, and T never drops below 1 - `max_opacity`. Each
 kind's own reference (its module's `optical_depth` or `log_transmittance`) comes from
@@ -28,12 +28,10 @@ def _noise_tex(fog):
 
 
 def _state(fog, index, layer, time, states):
-    """A particle layer's state: given, or simulated at `time`."""
+    """A simulated layer's state (particles): given, or simulated by its kind at `time`."""
     if states and index in states:
         return states[index]
-    from fogbank.kinds.particle_motion import simulate
-    from fogbank.scene.terrain import flat, height
-    return simulate(layer, time, fog.wind.vector(), flat if fog.scene == "calibration" else height)
+    return KINDS[layer.kind].simulate(layer, time, fog)
 
 
 def log_layer(layer, fog, O, omega, d, t, *, tex=None, state=None, weight=1.0):
@@ -52,7 +50,7 @@ def layer_transmittance(layer, fog, O, omega, d, t, *, tex=None, state=None):
     """One layer's T along the rays (no global effects)."""
     if tex is None and KINDS[layer.kind].uses_noise:
         tex = _noise_tex(fog)
-    if state is None and layer.kind == "particles":
+    if state is None and KINDS[layer.kind].simulate:
         state = _state(fog, -1, layer, float(np.asarray(t).reshape(-1)[0]), None)
     return np.exp(log_layer(layer, fog, O, omega, d, t, tex=tex, state=state))
 
@@ -72,17 +70,19 @@ def transmittance(fog, O, omega, d, t, *, states=None):
         if not layer.enabled:
             continue
         kind = KINDS[layer.kind]
-        state = _state(fog, i, layer, float(t[0]), states) if layer.kind == "particles" else None
+        state = _state(fog, i, layer, float(t[0]), states) if kind.simulate else None
         env = _env(fog, fog.density, tex, state)
         if kind.optical_depth is not None:
             tau = tau + kind.optical_depth(layer, O, omega, dd, t, env)
         else:   # as a sum of logarithms: a product of clarities can underflow
             log_direct = log_direct + kind.log_transmittance(layer, O, omega, dd, t, env)
-    # the total optical depth, kept at 0 or more (a carving body, of negative density,
-    # removes fog and never adds light), as the shader's exp(-max(tau, 0))
+    # the exponential layers' depth kept at 0 or more (a carving body, of negative density,
+    # removes fog and never adds light), the direct layers' added: as the shader's
+    # exp(-(max(tau, 0) + tauDirect))
     with np.errstate(invalid="ignore"):
-        total = np.where(np.isneginf(log_direct), np.inf, tau - fog.density * log_direct)
-    T = np.exp(-np.maximum(total, 0.0)) if fog.density > 0 else np.ones(len(d))
+        total = np.where(np.isneginf(log_direct), np.inf,
+                         np.maximum(tau, 0.0) - fog.density * log_direct)
+    T = np.exp(-total) if fog.density > 0 else np.ones(len(d))
     if eff.cutoff_distance > 0:
         T = np.where(d > eff.cutoff_distance, 1.0, T)
     return np.maximum(T, 1.0 - eff.max_opacity)

@@ -14,17 +14,17 @@ from typing import Any
 
 import numpy as np
 
+from fogbank.kinds import KINDS
 from fogbank.kinds.packing import Packed, direct_density, enabled, pack_layers, uses_noise, variant
-from fogbank.kinds.particle_motion import simulate
 from fogbank.scene import camera as cam
-from fogbank.scene import terrain
 
 SIM_CACHE = 64   # particle states kept (at most 16 layers x 1024 particles each)
 
 
 class Simulations:
-    """Particle states by (layer, time, wind, scene), simulated once and kept in a small
-    LRU (rays at one time, frames of a paused look). Safe to use from two threads."""
+    """Simulated states (particles) by (layer, time, wind, scene), simulated once by the
+    layer's kind and kept in a small LRU (rays at one time, frames of a paused look). Safe
+    to use from two threads."""
 
     def __init__(self, size: int = SIM_CACHE):
         self.size = size
@@ -37,8 +37,7 @@ class Simulations:
             if key in self._cache:
                 self._cache.move_to_end(key)
                 return self._cache[key]
-        ground = terrain.flat if fog.scene == "calibration" else terrain.height
-        state = simulate(layer, time, fog.wind.vector(), ground)
+        state = KINDS[layer.kind].simulate(layer, time, fog)
         with self._lock:
             self._cache[key] = state
             while len(self._cache) > self.size:
@@ -57,13 +56,13 @@ class FogPlan:
     uniforms: dict[str, Any]
 
     def swarms(self):
-        """(slot, values) of each particle layer, in slot order (the quads pass)."""
+        """(slot, values) of each layer drawn as quads (particles), in slot order."""
         return [(n, v) for n, (k, v) in enumerate(zip(self.packed.kinds, self.packed.values))
-                if k == "particles"]
+                if KINDS[k].quads]
 
 
 def plan_fog(fog, time: float, ref, sims: Simulations) -> FogPlan:
-    states = {i: sims.state(l, time, fog) for i, l in enabled(fog) if l.kind == "particles"}
+    states = {i: sims.state(l, time, fog) for i, l in enabled(fog) if KINDS[l.kind].simulate}
     e = fog.effects
     n = fog.noise
     return FogPlan(

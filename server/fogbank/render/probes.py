@@ -14,7 +14,9 @@ def fog_only(r, still, raymarch_steps: int | None = None, read: bool = True):
     """The scene passes (cached, slot "bench") and the fog pass (with the particle quads)
     alone: milliseconds, and with `read` the raw transmittance and inverse distance per
     fog texel, bottom row first, and the view. With raymarch_steps, the exponential
-    layers are raymarched instead of integrated in closed form."""
+    layers are raymarched instead of integrated in closed form. The time covers the GL
+    work of the fog and particle passes (uploads included), not the fog plan's CPU work
+    (packing, particle simulation), which runs on the preparation thread before it."""
     f = r.begin(still, slot="bench", msaa=True)
     f.raymarch_steps = raymarch_steps
     for p in (ShadowPass(), SkyPass(), ScenePass()):

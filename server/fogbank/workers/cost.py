@@ -14,7 +14,6 @@ from dataclasses import dataclass, field
 
 from fogbank.kinds import KINDS
 from fogbank.kinds.packing import enabled, uses_noise, variant
-from fogbank.kinds.particles import sim_seconds as particle_sim_seconds
 from fogbank.model.params import FogParams, StillParams
 from fogbank.render.targets import GBUFFER_BPP, LINEAR_BPP, MSAA_BPP, OUT_BPP
 
@@ -114,9 +113,9 @@ def transmittance_seconds(fog: FogParams, rays: int, distinct_times: int, scale:
     """Rays cost little; each distinct time simulates every particle layer once; each
     group of rays sharing an origin and a time is one draw, its layers packed relative
     to that origin (measured on llvmpipe: ~40 us + ~28 us per layer + 0.15 us per particle)."""
-    swarms = [l for _, l in enabled(fog) if l.kind == "particles"]
-    sim = sum(particle_sim_seconds(l) for l in swarms)
-    particles = sum(l.count for l in swarms)
+    simulated = [l for _, l in enabled(fog) if KINDS[l.kind].simulate]
+    sim = sum(KINDS[l.kind].simulate_seconds(l) for l in simulated)
+    particles = sum(getattr(l, "count", 0) for l in simulated)
     parts = {"rays": 2e-6 * rays * max(1, len(fog.layers)),
              "distinct ray times x particle simulation": distinct_times * sim,
              "distinct ray origins x packing": groups * (40e-6 + 28e-6 * len(fog.layers)
