@@ -373,10 +373,10 @@ def raw(fog, O, w, d, time, tex=None, states=None):
 def compose(fog, d, parts):
     """T from raw()'s parts: the global density, the cutoff and the max opacity."""
     e = fog.effects
-    if e.cutoff_distance > 0 and d > e.cutoff_distance:
-        return 1.0
     if fog.density == 0:
         return 1.0
+    if e.cutoff_distance > 0 and d > e.cutoff_distance:   # Biri 4.2: the fog colour; or none
+        return max(0.0, 1.0 - e.max_opacity) if e.cutoff_mode == "fog" else 1.0
     log_tau, log_direct, signed = parts
     # the exponential layers' depth is kept at 0 or more (a carving body removes fog, never
     # adds light); the direct layers (particles, distance fog) are not carved

@@ -51,7 +51,8 @@ def test_all_layers_with_effects(client):
         fog = FogParams(layers=layers, density=float(rng.uniform(0, 3)),
                         effects={"start_distance": float(rng.uniform(0, 20)),
                                  "cutoff_distance": float(rng.choice([0.0, rng.uniform(50, 150)])),
-                                 "max_opacity": float(rng.uniform(0.3, 1))})
+                                 "max_opacity": float(rng.uniform(0.3, 1)),
+                                 "cutoff_mode": str(rng.choice(["clear", "fog"]))})
         O, W, D = random_rays(rng, 128)
         t = float(rng.uniform(0, 10))
         got = glsl(client, fog, O, W, D, t)

@@ -105,7 +105,9 @@ def calibration_still(**fog):
       "radius": 5.0, "alpha": 0.5, "life_min": 30, "life_max": 60},
      {"kind": "homogeneous", "density": 0.004}],
 ])
-@pytest.mark.parametrize("effects", [{}, {"density": 1.7, "max_opacity": 0.8, "start_distance": 12.0}])
+@pytest.mark.parametrize("effects", [{}, {"density": 1.7, "max_opacity": 0.8, "start_distance": 12.0},
+                                     {"cutoff_distance": 60.0, "cutoff_mode": "fog", "max_opacity": 0.9},
+                                     {"cutoff_distance": 60.0, "cutoff_mode": "clear"}])
 def test_calibration_pixels_match_reference_blend(renderer, layers, effects):
     still = calibration_still(layers=layers, time=4.0, density=effects.get("density", 1.0))
     eff = {k: v for k, v in effects.items() if k != "density"}
@@ -353,3 +355,33 @@ def test_a_carved_frame_equals_its_rays_and_the_reference(renderer):
     assert float(np.abs(T.ravel() - want).max()) <= 2e-4
     carved = want[np.abs(want - 1.0) > 1e-3]
     assert float(np.ptp(want)) > 0.3 and len(carved) > 100   # fog, smoke and a clearing in view
+
+
+@pytest.mark.parametrize("name", ["biri-fig6", "biri-fig7", "biri-fig8"])
+def test_biri_presets_fill_points_beyond_the_threshold_with_fog(renderer, name):
+    """Biri 4.2: "if depth is beyond a viewing threshold ... the transparency will be set
+    to 1 to represent the fog color". Every fog texel farther than the preset's cutoff
+    (the sky among them) has raw T = 0, and they are a real share of the view (before,
+    the cutoff cleared them: an unfogged sky above dense ground fog)."""
+    from fogbank.model.presets import preset_dict
+    from fogbank.render.probes import fog_only
+    still = StillParams.model_validate({**preset_dict(name), "width": 160, "height": 90})
+    e = still.effects
+    assert (e.cutoff_mode, e.cutoff_distance > 0) == ("fog", True)
+    _, T, invd, _ = fog_only(renderer, still)
+    d = np.where(invd > 0, 1.0 / np.maximum(invd, 1e-30), e.sky_distance)
+    beyond = d > e.cutoff_distance
+    assert beyond.mean() > 0.1
+    assert float(T[beyond].max()) == 0.0
+    assert float(T[~beyond].min()) > 0.0   # nearer points keep their integrated fog
+
+
+def test_perlin_fog_has_no_threshold_and_fogs_its_sky(renderer):
+    """The Perlin write-up has no viewing threshold: its preset has none, so its sky is
+    fogged like any far point (before, a cutoff of 600 m left it clear)."""
+    from fogbank.model.presets import preset_dict
+    from fogbank.render.probes import fog_only
+    still = StillParams.model_validate({**preset_dict("perlin-fog"), "width": 160, "height": 90})
+    assert still.effects.cutoff_distance == 0.0
+    _, T, invd, _ = fog_only(renderer, still)
+    assert float(np.median(T[invd == 0])) < 0.5   # before: 1.0 for every sky texel

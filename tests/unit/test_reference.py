@@ -223,3 +223,20 @@ def test_turned_bodies_against_the_independent_rotation():
                                                           rel=1e-7, abs=1e-12)
     assert hits > 50
 
+
+
+@pytest.mark.parametrize("mode,beyond", [("fog", 1.0 - 0.8), ("clear", 1.0)])
+def test_cutoff_fills_with_fog_or_clears(mode, beyond):
+    """Biri 4.2: a point beyond the viewing threshold gets the fog colour (T = 0, then the
+    max opacity); Unreal's cutoff leaves it unfogged (T = 1). No fog at all (density 0)
+    is no fog either way."""
+    from fogbank.kinds.homogeneous import Homogeneous
+    from fogbank.kinds.reference import transmittance
+    from fogbank.model.params import FogParams
+    fog = FogParams(layers=[Homogeneous(density=0.01).model_dump()],
+                    effects={"cutoff_distance": 100.0, "cutoff_mode": mode, "max_opacity": 0.8})
+    O, w = np.zeros((2, 3)), np.array([[1.0, 0.0, 0.0]] * 2)
+    T = transmittance(fog, O, w, np.array([50.0, 150.0]), 0.0)
+    assert T.tolist() == [pytest.approx(np.exp(-0.5)), pytest.approx(beyond)]
+    none = fog.model_copy(update={"density": 0.0})
+    assert transmittance(none, O, w, np.array([50.0, 150.0]), 0.0).tolist() == [1.0, 1.0]

@@ -4,7 +4,8 @@ T = exp(-(max(density sum tau_i, 0) - density sum log T_j)) (the density scales 
 optical depth before the exponential; a carving body's negative depth never takes the
 exponential layers' sum below 0, and does not carve the direct layers), with the global effects applied as in
 render/shaders/fog/transmittance.glsl: the segment starts at `start_distance`, points
-beyond `cutoff_distance` get no fog, and T never drops below 1 - `max_opacity`. Each
+beyond `cutoff_distance` get no fog or all fog (`cutoff_mode`), and T never drops below
+1 - `max_opacity`. Each
 kind's own reference (its module's `optical_depth` or `log_transmittance`) comes from
 the registry.
 """
@@ -82,7 +83,9 @@ def transmittance(fog, O, omega, d, t, *, states=None):
     with np.errstate(invalid="ignore"):
         total = np.where(np.isneginf(log_direct), np.inf,
                          np.maximum(tau, 0.0) - fog.density * log_direct)
-    T = np.exp(-total) if fog.density > 0 else np.ones(len(d))
-    if eff.cutoff_distance > 0:
-        T = np.where(d > eff.cutoff_distance, 1.0, T)
+    if fog.density <= 0:
+        return np.ones(len(d))   # no fog, whatever the cutoff
+    T = np.exp(-total)
+    if eff.cutoff_distance > 0:   # beyond it: all fog (Biri 4.2) or none (Unreal)
+        T = np.where(d > eff.cutoff_distance, 0.0 if eff.cutoff_mode == "fog" else 1.0, T)
     return np.maximum(T, 1.0 - eff.max_opacity)

@@ -74,7 +74,11 @@ class NoiseBake(Strict):
 
 class Effects(Strict):
     start_distance: float = num(0.0, 0, 10000, 1, "m", "no fog nearer than this")
-    cutoff_distance: float = num(0.0, 0, 100000, 10, "m", "no fog on points beyond this (0 = off)")
+    cutoff_distance: float = num(0.0, 0, 100000, 10, "m",
+                                 "points beyond this get no fog or all fog, by cutoff_mode (0 = off)")
+    cutoff_mode: Literal["clear", "fog"] = Field(
+        "clear", description="beyond cutoff_distance: 'clear' shows points unfogged (Unreal's "
+                             "meaning, for skies), 'fog' hides them in the fog colour (Biri 2002, 4.2)")
     max_opacity: float = num(1.0, 0, 1, 0.01, "", "fog never hides more than this")
     sky_distance: float = num(800.0, 1, 100000, 10, "m", "how far a sky pixel's ray runs")
     scatter: float = num(0.6, 0, 10, 0.05, "", "sun in-scattering strength (Gawron 3.2)")

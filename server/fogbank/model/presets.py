@@ -67,14 +67,14 @@ def _presets() -> dict[str, dict[str, Any]]:
             "description": "Fog from four cosine functions plus one constant (the product term "
                            "expanded into two cosines), 20 m per function unit, wind-driven.",
             "params": {"camera": view, "layers": [_biri_fig6_layer()],
-                       "effects": {"cutoff_distance": 500.0}},
+                       "effects": {"cutoff_distance": 500.0, "cutoff_mode": "fog"}},
         },
         "biri-fig7": {
             "title": "Biri et al. 2002, figure 7",
             "description": "Two fourth-degree polynomials {0.8, -1, 0, 0, 1} tiled on X and Z, "
                            "their minimum on the house: its middle is clear, its ends in mist.",
             "params": {"camera": house_view,
-                       "effects": {"cutoff_distance": 500.0},
+                       "effects": {"cutoff_distance": 500.0, "cutoff_mode": "fog"},
                        "layers": [
                            {"kind": "polynomial", "density": 0.014, "coeffs": [0.8, -1.0, 0.0, 0.0, 1.0],
                             "axis": (1 / 12.0, 0.0, 0.0), "offset": 0.63 - hx / 12.0, "half_width": 1.0},
@@ -86,7 +86,7 @@ def _presets() -> dict[str, dict[str, Any]]:
             "description": "Constant fog with four point potentials centred on trees: the mist "
                            "gathers around them.",
             "params": {"camera": {"position": (20.0, 30.0, 30.0), "yaw": 40.0, "pitch": -14.0, "fov": 55.0},
-                       "effects": {"cutoff_distance": 500.0},
+                       "effects": {"cutoff_distance": 500.0, "cutoff_mode": "fog"},
                        "layers": [{"kind": "homogeneous", "density": 0.004}] + [
                            {"kind": "potential", "shape": "point", "center": c, "strength": 1.2,
                             "c": 20.0, "e": 0.12} for c in landmarks().trees]},
@@ -122,7 +122,6 @@ def _presets() -> dict[str, dict[str, Any]]:
             "description": "The course write-up's fog: baked fractal Perlin noise, "
                            "f = exp(-rho d n), n -> n dY^2 / 2 + 0.001, drifting with the wind.",
             "params": {"camera": {"position": (-30.0, 60.0, 120.0), "yaw": 12.0, "pitch": -20.0, "fov": 60.0},
-                       "effects": {"cutoff_distance": 600.0},
                        "layers": [{"kind": "noise", "mode": "surface", "density": 0.004, "scale": 70.0,
                                    "height_falloff": True, "falloff_scale": 20.0, "wind": True}]},
         },

@@ -71,6 +71,7 @@ def plan_fog(fog, time: float, ref, sims: Simulations) -> FogPlan:
         has_particles=bool(states),
         noise=(n.size, n.octaves, n.blur, n.seed) if uses_noise(fog) else None,
         uniforms={"uStartDistance": e.start_distance, "uCutoffDistance": e.cutoff_distance,
+                  "uCutoffFog": e.cutoff_mode == "fog",
                   "uMaxOpacity": e.max_opacity, "uDensity": direct_density(fog)},
     )
 

@@ -12,6 +12,7 @@ uniform vec4 uLayer[MAX_LAYERS * LAYER_VEC4];        // per-layer parameters (ki
 uniform float uDensity;                               // global density (0: no fog), for T_j^density
 uniform float uStartDistance;                         // m
 uniform float uCutoffDistance;                        // m, 0 = off
+uniform bool uCutoffFog;                              // beyond the cutoff: all fog (Biri 4.2), else none
 uniform sampler2D uParticles;                         // (x, y, z, strength) per particle
 uniform sampler3D uNoise;
 
@@ -25,7 +26,8 @@ uniform sampler3D uNoise;
 // RAYMARCH_STEPS samples of the summed density (exponential layers only), for the
 // benchmark that measures what the closed forms save (fog/density.gen.glsl, generated).
 float fogRawTransmittance(vec3 O, vec3 w, float d) {
-    if (uCutoffDistance > 0.0 && d > uCutoffDistance) return 1.0;
+    if (uDensity <= 0.0) return 1.0;
+    if (uCutoffDistance > 0.0 && d > uCutoffDistance) return uCutoffFog ? 0.0 : 1.0;
     vec3 Os = O + w * uStartDistance;
     float ds = max(d - uStartDistance, 0.0);
     float h = ds / float(RAYMARCH_STEPS);
@@ -52,8 +54,10 @@ float fogRawTransmittance(vec3 O, vec3 w, float d) {
 // particles are multiplied in by their own pass, equals this inline sum.
 // O: eye (m, relative to E), w: unit direction, d: length (m).
 float fogRawTransmittance(vec3 O, vec3 w, float d) {
-    if (uCutoffDistance > 0.0 && d > uCutoffDistance) return 1.0;
     if (uDensity <= 0.0) return 1.0;                  // no fog (and no pow(0, 0) below)
+    // beyond the cutoff: Biri's "transparency set to 1 to represent the fog color" (T = 0),
+    // or Unreal's unfogged far field (T = 1)
+    if (uCutoffDistance > 0.0 && d > uCutoffDistance) return uCutoffFog ? 0.0 : 1.0;
     vec3 Os = O + w * uStartDistance;                 // the segment begins at the start distance
     float ds = max(d - uStartDistance, 0.0);
     vec3 P = Os + w * ds;
