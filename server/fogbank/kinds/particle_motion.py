@@ -18,6 +18,7 @@ from typing import Callable
 import numpy as np
 
 _M64 = np.uint64(0xFFFFFFFFFFFFFFFF)
+FADE_IN_STEPS = 2.0   # a newborn particle's strength ramps from 0 over this many steps
 
 
 def _splitmix(x: np.ndarray) -> np.ndarray:
@@ -55,7 +56,7 @@ def _cone(axis: np.ndarray, spread_rad: float, u1, u2) -> np.ndarray:
 def simulate(layer, t: float, wind: np.ndarray,
              ground: Callable[[np.ndarray, np.ndarray], np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
     """Positions (M, 3) and strengths s_j = remaining life / initial life (M,) of the
-    particles alive at time t. M <= count."""
+    particles alive at time t, faded in over their first FADE_IN_STEPS steps. M <= count."""
     n = layer.count
     period = layer.life_max
     slots = np.arange(n, dtype=np.int64)
@@ -96,5 +97,8 @@ def simulate(layer, t: float, wind: np.ndarray,
         v = np.where(moving[:, None], nv, v)
     frac = (age - steps)[:, None]
     pos = prev + (p - prev) * frac
-    strength = (life - age) / life
+    # Fischer: strength = remaining life / initial life. A particle born at full strength
+    # pops into view (fischer-smoke: 0.80 of T between frames 0.1 s apart); it fades in
+    # over its first FADE_IN_STEPS steps instead (docs/departures.md)
+    strength = (life - age) / life * np.minimum(1.0, age / FADE_IN_STEPS)
     return pos, strength
