@@ -303,26 +303,33 @@ def test_growing_ray_targets_and_dropping_caches_leave_no_gl_error(renderer):
     assert renderer.ctx.error == "GL_NO_ERROR"
 
 
-def test_particle_quads_match_the_reference_at_every_fog_texel(renderer):
-    """The pass that draws particles in frames (instanced quads multiplied into the fog
-    target) against the float64 product of the particles' clarities along each texel's
-    ray (hand-written camera), the particle state simulated independently of the renderer."""
-    from fogbank.kinds.particle_motion import simulate
+def fog_texels(renderer, still):
+    """The frame's fog pass and particle quads (raw T per fog texel, bottom row first),
+    with each texel's ray from the hand-written camera: (T, eye, directions, lengths)."""
     from fogbank.render.probes import fog_only
-    from fogbank.scene import terrain
-    still = calibration_still(time=4.0, density=1.3, layers=[
-        {"kind": "particles", "count": 300, "emitter": (0.0, 1.0, -40.0), "spread": 70.0, "speed": 3.0,
-         "radius": 5.0, "alpha": 0.5, "life_min": 30, "life_max": 60}])
     _, T, invd, view = fog_only(renderer, still)
     h, w = T.shape
     py, px = np.mgrid[0:h, 0:w]
     dirs = hand_rays(still.camera, px.ravel(), py.ravel(), w, h)
     d = np.where(invd.ravel() > 0, 1.0 / np.maximum(invd.ravel().astype(np.float64), 1e-30),
                  still.effects.sky_distance)
+    return T.ravel(), np.broadcast_to(view.eye, dirs.shape), dirs, d
+
+
+def test_particle_quads_match_the_reference_at_every_fog_texel(renderer):
+    """The pass that draws particles in frames (instanced quads multiplied into the fog
+    target) against the float64 product of the particles' clarities along each texel's
+    ray (hand-written camera), the particle state simulated independently of the renderer."""
+    from fogbank.kinds.particle_motion import simulate
+    from fogbank.scene import terrain
+    still = calibration_still(time=4.0, density=1.3, layers=[
+        {"kind": "particles", "count": 300, "emitter": (0.0, 1.0, -40.0), "spread": 70.0, "speed": 3.0,
+         "radius": 5.0, "alpha": 0.5, "life_min": 30, "life_max": 60}])
+    T, eye, dirs, d = fog_texels(renderer, still)
     fog = still.fog()
     state = simulate(fog.layers[0], fog.time, fog.wind.vector(), terrain.flat)
-    want = reference(fog, np.broadcast_to(view.eye, dirs.shape), dirs, d, fog.time, states={0: state})
-    err = np.abs(T.ravel() - want)
+    want = reference(fog, eye, dirs, d, fog.time, states={0: state})
+    err = np.abs(T - want)
     assert float(err.max()) <= 2e-4
     assert float(np.ptp(want)) > 0.3   # the particles cover part of the view: the check has teeth
 
@@ -333,26 +340,19 @@ def test_a_carved_frame_equals_its_rays_and_the_reference(renderer):
     and the float64 reference, since a carving body takes depth from the exponential
     layers only, never from the direct ones."""
     from fogbank.kinds.particle_motion import simulate
-    from fogbank.render.probes import fog_only
     from fogbank.scene import terrain
     still = calibration_still(time=4.0, layers=[
         {"kind": "homogeneous", "density": 0.01},
         {"kind": "ellipsoid", "center": (0.0, 4.0, -40.0), "radii": (18.0, 10.0, 14.0), "density": -0.2},
         {"kind": "particles", "count": 200, "emitter": (0.0, 1.0, -40.0), "spread": 60.0, "speed": 2.0,
          "radius": 4.0, "alpha": 0.6, "life_min": 30, "life_max": 60}])
-    _, T, invd, view = fog_only(renderer, still)
-    h, w = T.shape
-    py, px = np.mgrid[0:h, 0:w]
-    dirs = hand_rays(still.camera, px.ravel(), py.ravel(), w, h)
-    d = np.where(invd.ravel() > 0, 1.0 / np.maximum(invd.ravel().astype(np.float64), 1e-30),
-                 still.effects.sky_distance)
+    T, eye, dirs, d = fog_texels(renderer, still)
     fog = still.fog()
-    eye = np.broadcast_to(view.eye, dirs.shape)
     rays = renderer.transmittance(fog, eye, dirs, d, np.full(len(d), fog.time))
     state = simulate(fog.layers[2], fog.time, fog.wind.vector(), terrain.flat)
     want = reference(fog, eye, dirs, d, fog.time, states={2: state})
-    assert float(np.abs(T.ravel() - rays).max()) <= 2e-4
-    assert float(np.abs(T.ravel() - want).max()) <= 2e-4
+    assert float(np.abs(T - rays).max()) <= 2e-4
+    assert float(np.abs(T - want).max()) <= 2e-4
     carved = want[np.abs(want - 1.0) > 1e-3]
     assert float(np.ptp(want)) > 0.3 and len(carved) > 100   # fog, smoke and a clearing in view
 

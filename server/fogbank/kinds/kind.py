@@ -10,7 +10,7 @@ GLSL, the packing, the cost estimate, the test draws) reads the registry.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, Callable
 
 import numpy as np
@@ -206,8 +206,6 @@ class Kind:
     extra_seconds: Callable[[Any, float], float] = lambda layer, fog_mpx: 0.0
     describe: Callable[[Any], str] = lambda layer: layer.kind
     jit_units: Callable[[tuple], float] = lambda variant: 1.0
-    glsl: str = ""                         # its GLSL file, kinds/<name>.glsl by default
-    extra: dict = field(default_factory=dict)
 
     @property
     def name(self) -> str:
@@ -215,7 +213,7 @@ class Kind:
 
     @property
     def glsl_file(self) -> str:
-        return self.glsl or f"kinds/{self.name}.glsl"
+        return f"kinds/{self.name}.glsl"   # beside its module
 
     def __post_init__(self) -> None:
         if (self.optical_depth is None) == (self.log_transmittance is None):

@@ -9,7 +9,7 @@ from __future__ import annotations
 import threading
 from collections import OrderedDict
 from concurrent.futures import Future
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -93,7 +93,6 @@ class Frame:
     sun_view_proj: np.ndarray | None = None
     fog_tex: Any = None
     image: np.ndarray | None = None
-    extra: dict = field(default_factory=dict)
 
     def fog_plan(self) -> FogPlan:
         return self.plan.result()

@@ -8,6 +8,7 @@ from __future__ import annotations
 import moderngl
 import numpy as np
 
+from fogbank.kinds.packing import variant
 from fogbank.render.frame import plan_fog
 from fogbank.render.gl import TEX, release_fbo, set_uniforms
 from fogbank.render.passes.fog import bind_fog
@@ -55,7 +56,7 @@ class RayCaster:
         data[:n, :3], data[:n, 3] = W[order], D[order]
         rays.write(data.tobytes(), viewport=(0, 0, RAYS_PER_ROW, rows))
         fbo.use()
-        prog = r.programs.get("passes/fullscreen.vert", "passes/rays.frag", _key(fog),
+        prog = r.programs.get("passes/fullscreen.vert", "passes/rays.frag", variant(fog),
                               RAYS_PER_ROW=RAYS_PER_ROW)
         rays.use(TEX["uRays"])
         for g, (tval, *ref) in enumerate(groups):
@@ -75,7 +76,3 @@ class RayCaster:
         out[order] = res[:n]
         return out
 
-
-def _key(fog):
-    from fogbank.kinds.packing import variant
-    return variant(fog)
