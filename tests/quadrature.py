@@ -99,14 +99,18 @@ def tau_polynomial(layer, fog, O, w, d, time):
     a = layer.axis
     u0q = sum(_q(ai) * _q(xi) for ai, xi in zip(a, Os)) + _q(layer.offset)
     rate = float(np.dot(a, w))
-    repeat = layer.mode == "repeat"
-    if repeat:   # shift u0 by whole tiles, exactly
-        u0q -= 2 * _q(C) * math.floor((u0q + _q(C)) / (2 * _q(C)))
+    tiled, mirror = layer.mode != "zero", layer.mode == "mirror"
+    if tiled:   # shift u0 by whole periods (two tiles when mirrored, keeping parity), exactly
+        period = _q(C) * (4 if mirror else 2)
+        u0q -= period * math.floor((u0q + _q(C)) / period)
     u0 = float(u0q)
 
     def P(u):
-        if repeat:
-            u = u - 2 * C * math.floor((u + C) / (2 * C))
+        if tiled:
+            n = math.floor((u + C) / (2 * C))
+            u = u - 2 * C * n
+            if mirror and n % 2:    # the odd tiles are reflected
+                u = -u
         elif u < -C or u > C:
             return 0.0
         return _poly(layer, u)
@@ -115,7 +119,7 @@ def tau_polynomial(layer, fog, O, w, d, time):
         return layer.density * d * P(u0)
     u1 = u0 + rate * d
     lo, hi = min(u0, u1), max(u0, u1)
-    if not repeat:
+    if not tiled:
         lo, hi = max(lo, -C), min(hi, C)
         return layer.density * (_quad(P, lo, hi) if hi > lo else 0.0) / abs(rate)
     n0, n1 = math.floor((lo + C) / (2 * C)), math.floor((hi + C) / (2 * C))
@@ -418,22 +422,35 @@ def noise_bound(fog, tex, w, d):
     return min(total, 1.0)
 
 
-def perturbed(O, w, d, eta, n=9):
-    """Rays of the box around this one: its length scaled by 1 - eta, 1 or 1 + eta, and its
-    direction turned by n steps from -eta to eta about each of two axes across it."""
+def box_ray(O, w, d, eta, x):
+    """The ray of the box around (O, w, d) at x in [-1, 1]^3: its length scaled by
+    1 + x[0] eta, its direction turned by x[1] eta and x[2] eta about two axes across it."""
     w = np.asarray(w, dtype=np.float64)
     a = np.cross(w, [1.0, 0.0, 0.0] if abs(w[0]) < 0.9 else [0.0, 1.0, 0.0])
     a /= np.linalg.norm(a)
     b = np.cross(w, a)
-    out = []
-    for fl in (-1, 0, 1):
-        for fa in np.linspace(-1, 1, n):
-            for fb in np.linspace(-1, 1, n):
-                if fl == 0 and fa == 0 and fb == 0:
-                    continue
-                v = w + eta * (fa * a + fb * b)
-                out.append((O, v / np.linalg.norm(v), d * (1 + fl * eta)))
-    return out
+    v = w + eta * (x[1] * a + x[2] * b)
+    return O, v / np.linalg.norm(v), d * (1 + x[0] * eta)
+
+
+def perturbed(O, w, d, eta, n=9):
+    """Rays of the box around this one: its length scaled by 1 - eta, 1 or 1 + eta, and its
+    direction turned by n steps from -eta to eta about each of two axes across it; with
+    each ray its point x in the box."""
+    return [(x, box_ray(O, w, d, eta, x)) for x in
+            ((fl, fa, fb) for fl in (-1, 0, 1) for fa in np.linspace(-1, 1, n)
+             for fb in np.linspace(-1, 1, n)) if any(x)]
+
+
+def box_extreme(T, start, sign):
+    """The least (sign 1) or greatest (sign -1) of T over the box [-1, 1]^3, searched
+    from the grid's best point: a small dense feature can lie between grid points (a
+    1 cm particle 36 km out passes 4 mm apart between them, more than its own radius)."""
+    from scipy.optimize import minimize
+    found = minimize(lambda x: sign * T(x), np.asarray(start, dtype=np.float64),
+                     method="Powell", bounds=[(-1.0, 1.0)] * 3,
+                     options={"xtol": 1e-4, "ftol": 1e-12, "maxfev": 400})
+    return sign * found.fun
 
 
 def check(fog, O, w, d, time, got, tol, tex=None, states=None):
@@ -454,13 +471,24 @@ def check(fog, O, w, d, time, got, tol, tex=None, states=None):
     # The box of rays is connected and T is continuous on it (unless the cutoff distance
     # falls inside it, where T jumps), so every value between its least and greatest T is
     # the exact T of some ray in the box; across the cutoff only the values themselves count.
-    box = perturbed(O, w, d, RAY_ULPS * ULP)
-    values = [x for x in (truth(fog, o, v, l, time, tex, states) for o, v, l in box) if x is not None]
-    values.append(want)
+    eta = RAY_ULPS * ULP
+    seen = [(x, truth(fog, *ray, time, tex, states), ray[2]) for x, ray in perturbed(O, w, d, eta)]
+    seen = [(x, v, l) for x, v, l in seen if v is not None] + [((0, 0, 0), want, d)]
+    values = [v for _, v, _ in seen]
     cutoff = fog.effects.cutoff_distance
-    if cutoff > 0 and min(l for _, _, l in box) <= cutoff < max(l for _, _, l in box):
+    if cutoff > 0 and min(l for _, _, l in seen) <= cutoff < max(l for _, _, l in seen):
         if min(abs(got - x) for x in values) <= allowed:
             return err, True, "backward"
-    elif min(values) - allowed <= got <= max(values) + allowed:
+        return err, False, "beyond"
+    if min(values) - allowed <= got <= max(values) + allowed:
+        return err, True, "backward"
+
+    def T(x):
+        v = truth(fog, *box_ray(O, w, d, eta, x), time, tex, states)
+        return want if v is None else v
+    # between the grid's points: the box's own least or greatest T
+    sign = 1.0 if got < min(values) else -1.0
+    start = min(seen, key=lambda s: sign * s[1])[0]
+    if sign * (box_extreme(T, start, sign) - got) <= allowed:
         return err, True, "backward"
     return err, False, "beyond"
