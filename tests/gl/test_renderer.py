@@ -403,3 +403,50 @@ def test_fischer_smoke_is_temporally_stable(renderer):
     amount = (1.0 - Ts).sum(axis=(1, 2))
     assert float(np.abs(np.diff(amount)).max() / amount.mean()) <= 0.04
     assert float(amount.min()) > 0.0   # smoke in view all along
+
+
+@pytest.mark.parametrize("start", [0.0, 40.0])
+def test_gawron_scatter_color_and_start_distance(renderer, start):
+    """Gawron eqs. 5-8 by hand: every interior pixel of the calibration scene is
+    T C + (1 - T) (C_fog + C_sun C_scatter s max(0, n . L)^e), n = p_s / |p_s|,
+    p_s = (P - eye) + ScatterStartDist added to each component; T from the reference."""
+    still = calibration_still(layers=[{"kind": "homogeneous", "density": 0.015}],
+                              sun={"azimuth": 10.0, "elevation": 12.0, "color": "#fff4e0", "intensity": 2.0})
+    eff = still.effects.model_copy(update={"scatter": 0.7, "scatter_exponent": 6.0,
+                                           "scatter_color": "#ff9a40", "scatter_start": start})
+    still = still.model_copy(update={"effects": eff})
+    img = renderer.render(still).astype(np.float64)
+    py, px = np.mgrid[0:H, 0:W]
+    w = hand_rays(still.camera, px.ravel(), (H - 1 - py).ravel(), W, H)
+    eye = np.asarray(still.camera.position, dtype=np.float64)
+    d, obj = _cast(eye, w)
+    obj = np.where(d < cam.FAR, obj, -1).reshape(H, W)
+    same = np.ones((H, W), bool)
+    for dy in (-1, 0, 1):
+        for dx in (-1, 0, 1):
+            same &= np.roll(np.roll(obj, dy, 0), dx, 1) == obj
+    same[[0, -1], :] = same[:, [0, -1]] = False
+    sel = same.ravel()
+    d = np.where(obj.ravel() == -1, still.effects.sky_distance, d)[sel]
+    ws = w[sel]
+    T = reference(still.fog(), np.broadcast_to(eye, ws.shape), ws, d, still.time)
+    albedo = {-1: scenes.CALIBRATION_SKY, 0: scenes.CALIBRATION_GROUND}
+    albedo.update({i: c for i, (_, _, c) in enumerate(scenes.CALIBRATION_BOXES, start=1)})
+    scene_lin = np.array([srgb_to_linear(albedo[o]) for o in obj.ravel()[sel]])
+    L = still.sun.direction()
+    ps = ws * d[:, None] + start
+    n = ps / np.linalg.norm(ps, axis=1, keepdims=True)
+    tint = np.array(srgb_to_linear("#fff4e0")) * 2.0 * np.array(srgb_to_linear("#ff9a40")) * 0.7
+    fog = np.array(srgb_to_linear(still.fog_color)) + tint * np.maximum(n @ L, 0.0)[:, None] ** 6.0
+    want = _to_srgb(T[:, None] * scene_lin + (1 - T[:, None]) * fog)
+    err = np.abs(img.reshape(-1, 3)[sel] - want)
+    assert err.max() <= 2.0
+    glow = np.maximum(n @ L, 0.0) ** 6.0
+    assert float(glow.max() - glow.min()) > 0.2   # the scattering lobe varies across the view
+
+
+def test_gawron_preset_scatters_its_own_colour_from_a_start_distance():
+    from fogbank.model.presets import preset_dict
+    look = StillParams.model_validate(preset_dict("gawron-distance"))
+    e = look.effects
+    assert (e.scatter_start > 0, e.scatter_color != "#ffffff", look.sun.color != e.scatter_color) == (True, True, True)

@@ -83,6 +83,10 @@ class Effects(Strict):
     sky_distance: float = num(800.0, 1, 100000, 10, "m", "how far a sky pixel's ray runs")
     scatter: float = num(0.6, 0, 10, 0.05, "", "sun in-scattering strength (Gawron 3.2)")
     scatter_exponent: float = num(8.0, 0.1, 256, 0.5, "", "in-scattering falloff")
+    scatter_color: Color = Field("#ffffff", description="Gawron's ScatterColor, as a tint of the "
+                                 "sunlight: in-scattered light = sun colour x intensity x this x scatter")
+    scatter_start: float = num(0.0, 0, 10000, 10, "m", "Gawron eq. 5: ScatterStartDist, added to the "
+                               "view vector (each component) before it is normalised")
     blur: Literal["off", "single", "separate"] = Field(
         "off", description="fog blur: off, fused with the composite, or separate passes")
     blur_radius: float = num(3.0, 0, 16, 0.25, "px", "Gaussian sigma at full fog (at 720 px high)")

@@ -153,12 +153,13 @@ def _presets() -> dict[str, dict[str, Any]]:
         },
         "gawron-distance": {
             "title": "Gawron & Boryczka 2018: distance fog",
-            "description": "Distance fog with noise-varied density, orange sun in-scattering and "
-                           "a Gaussian blur that grows with the fog.",
+            "description": "Distance fog with noise-varied density, an orange scatter colour of "
+                           "its own in the sun's direction (eqs. 5-8, with the scatter start "
+                           "distance) and a Gaussian blur that grows with the fog.",
             "params": {"camera": view, "fog_color": "#a9bcd9",
-                       "sun": {"azimuth": 30.0, "elevation": 9.0, "color": "#ffb066", "intensity": 3.0},
-                       "effects": {"scatter": 0.22, "scatter_exponent": 6.0, "blur": "single",
-                                   "blur_radius": 3.0},
+                       "sun": {"azimuth": 30.0, "elevation": 9.0, "color": "#fff1d6", "intensity": 3.0},
+                       "effects": {"scatter": 0.25, "scatter_exponent": 4.0, "scatter_color": "#ffa647",
+                                   "scatter_start": 20.0, "blur": "single", "blur_radius": 3.0},
                        "layers": [{"kind": "distance", "start": 10.0, "distance": 260.0, "exponent": 0.55,
                                    "low": 0.8, "high": 1.2, "max": 0.75, "noise_scale": 90.0, "wind": True}]},
         },

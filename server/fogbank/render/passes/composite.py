@@ -34,7 +34,9 @@ class CompositePass(Pass):
         set_uniforms(prog, {
             "uFwd": v.fwd, "uRight": v.right, "uUp": v.up,
             "uFogColor": np.array(srgb_to_linear(look.fog_color)),
-            "uSunDir": look.sun.direction(), "uScatterColor": sun_color(look) * e.scatter,
+            "uSunDir": look.sun.direction(),
+            "uScatterColor": sun_color(look) * np.array(srgb_to_linear(e.scatter_color)) * e.scatter,
+            "uScatterStart": e.scatter_start, "uSkyDistance": e.sky_distance,
             "uScatterExponent": e.scatter_exponent, "uBlurSigma": blur_sigma(f),
             "uMaxOpacity": e.max_opacity, "uBlurExponent": e.blur_exponent})
         f.gbuffer.color.use(TEX["uColor"])

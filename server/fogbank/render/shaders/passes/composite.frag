@@ -14,8 +14,10 @@ uniform sampler2D uFog;           // (raw T, 1/distance) at 1/FOG_SCALE size
 uniform vec3 uFwd, uRight, uUp;
 uniform vec3 uFogColor;           // linear
 uniform vec3 uSunDir;
-uniform vec3 uScatterColor;       // sun colour * intensity * scatter strength
+uniform vec3 uScatterColor;       // sun colour * intensity * scatter colour * scatter strength
 uniform float uScatterExponent;
+uniform float uScatterStart;      // m, Gawron's ScatterStartDist (eq. 5); 0 = the view ray
+uniform float uSkyDistance;       // m, how far a sky pixel's ray runs
 uniform float uBlurSigma;         // px at full fog
 uniform float uBlurExponent;
 layout(location = 0) out vec4 fColor;
@@ -57,7 +59,12 @@ void main() {
     float invd = texelFetch(uInvDist, px, 0).r;
     float T = fogFinish(fogT(px, invd));
     vec3 w = viewRay(vUV * 2.0 - 1.0, uFwd, uRight, uUp);
-    vec3 fog = uFogColor + uScatterColor * pow(max(dot(w, uSunDir), 0.0), uScatterExponent);
+    // Gawron eqs. 5-8: p_s = (WorldPos - CameraPos) + ScatterStartDist, the scalar added to
+    // each component as in the paper's Listing 1; F = max(0, p_s/|p_s| . L)^exponent;
+    // C_fog + C_scatter F. With no start distance p_s/|p_s| is the view ray itself.
+    float dist = invd > 0.0 ? 1.0 / invd : uSkyDistance;
+    vec3 ws = uScatterStart > 0.0 ? normalize(w * dist + vec3(uScatterStart)) : w;
+    vec3 fog = uFogColor + uScatterColor * pow(max(dot(ws, uSunDir), 0.0), uScatterExponent);
     vec3 scene = texelFetch(uColor, px, 0).rgb;
     if (BLUR_MODE == 1) {
         float sigma = uBlurSigma * pow(1.0 - T, uBlurExponent);
