@@ -202,11 +202,13 @@ def test_line_potential_given_by_a_point_far_along_the_line(client):
         assert want.min() < 0.3 and want.max() > 0.6
 
 
-@pytest.mark.parametrize("mode", ["repeat", "zero"])
+@pytest.mark.parametrize("mode", ["mirror", "repeat", "zero"])
 def test_short_ray_near_a_root_of_a_polynomial_with_large_coefficients(client, mode):
     """5e5 (u - 1)^2 on [-1000, 1000]: near u = 1 its power-basis terms (1e6) cancel to
-    0.5, which float32 kept to ~10%. Re-expanded about the ray it keeps its digits."""
-    base = {"kind": "polynomial", "coeffs": [5e5, -1e6, 5e5], "half_width": 1000.0,
+    0.5, which float32 kept to ~10%. Re-expanded about the ray it keeps its digits. Repeat
+    mode needs equal borders: 1.25e5 (u^2 - 1)^2, the same near u = 1 to 0.1%."""
+    coeffs = [1.25e5, 0.0, -2.5e5, 0.0, 1.25e5] if mode == "repeat" else [5e5, -1e6, 5e5]
+    base = {"kind": "polynomial", "coeffs": coeffs, "half_width": 1000.0,
             "axis": [1.0, 0.0, 0.0], "offset": 0.0, "density": 10.0, "mode": mode}
     fog = FogParams(layers=[base], scene="calibration")
     O = np.array([[1.0 + off, 0.0, -0.01] for off in (1e-3, 2e-3, 3e-3, -2e-3)])

@@ -357,54 +357,6 @@ def test_a_carved_frame_equals_its_rays_and_the_reference(renderer):
     assert float(np.ptp(want)) > 0.3 and len(carved) > 100   # fog, smoke and a clearing in view
 
 
-@pytest.mark.parametrize("name", ["biri-fig6", "biri-fig7", "biri-fig8"])
-def test_biri_presets_fill_points_beyond_the_threshold_with_fog(renderer, name):
-    """Biri 4.2: "if depth is beyond a viewing threshold ... the transparency will be set
-    to 1 to represent the fog color". Every fog texel farther than the preset's cutoff
-    (the sky among them) has raw T = 0, and they are a real share of the view (before,
-    the cutoff cleared them: an unfogged sky above dense ground fog)."""
-    from fogbank.model.presets import preset_dict
-    from fogbank.render.probes import fog_only
-    still = StillParams.model_validate({**preset_dict(name), "width": 160, "height": 90})
-    e = still.effects
-    assert (e.cutoff_mode, e.cutoff_distance > 0) == ("fog", True)
-    _, T, invd, _ = fog_only(renderer, still)
-    d = np.where(invd > 0, 1.0 / np.maximum(invd, 1e-30), e.sky_distance)
-    beyond = d > e.cutoff_distance
-    assert beyond.mean() > 0.1
-    assert float(T[beyond].max()) == 0.0
-    assert float(T[~beyond].min()) > 0.0   # nearer points keep their integrated fog
-
-
-def test_perlin_fog_has_no_threshold_and_fogs_its_sky(renderer):
-    """The Perlin write-up has no viewing threshold: its preset has none, so its sky is
-    fogged like any far point (before, a cutoff of 600 m left it clear)."""
-    from fogbank.model.presets import preset_dict
-    from fogbank.render.probes import fog_only
-    still = StillParams.model_validate({**preset_dict("perlin-fog"), "width": 160, "height": 90})
-    assert still.effects.cutoff_distance == 0.0
-    _, T, invd, _ = fog_only(renderer, still)
-    assert float(np.median(T[invd == 0])) < 0.5   # before: 1.0 for every sky texel
-
-
-def test_fischer_smoke_is_temporally_stable(renderer):
-    """Frames 0.1 s apart over 8 s of the chimney smoke: no texel's fog transmittance
-    changes by more than 0.2 (0.80 when particles were born at full strength), and the
-    total fog amount by at most 4% of its mean (6.7% before)."""
-    from fogbank.model.presets import preset_dict
-    from fogbank.render.probes import fog_only
-    base = preset_dict("fischer-smoke")
-    Ts = []
-    for i in range(80):
-        still = StillParams.model_validate({**base, "width": 240, "height": 135, "time": base["time"] + 0.1 * i})
-        Ts.append(fog_only(renderer, still)[1].astype(np.float64))
-    Ts = np.array(Ts)
-    assert float(np.abs(np.diff(Ts, axis=0)).max()) <= 0.2
-    amount = (1.0 - Ts).sum(axis=(1, 2))
-    assert float(np.abs(np.diff(amount)).max() / amount.mean()) <= 0.04
-    assert float(amount.min()) > 0.0   # smoke in view all along
-
-
 @pytest.mark.parametrize("start", [0.0, 40.0])
 def test_gawron_scatter_color_and_start_distance(renderer, start):
     """Gawron eqs. 5-8 by hand: every interior pixel of the calibration scene is

@@ -71,8 +71,9 @@ def _presets() -> dict[str, dict[str, Any]]:
         },
         "biri-fig7": {
             "title": "Biri et al. 2002, figure 7",
-            "description": "Two fourth-degree polynomials {0.8, -1, 0, 0, 1} tiled on X and Z, "
-                           "their minimum on the house: its middle is clear, its ends in mist.",
+            "description": "Two fourth-degree polynomials {0.8, -1, 0, 0, 1} on X and Z, mirrored "
+                           "at their tile borders (no seam), their minimum on the house: its middle "
+                           "is clear, its ends in mist.",
             "params": {"camera": house_view,
                        "effects": {"cutoff_distance": 500.0, "cutoff_mode": "fog"},
                        "layers": [
