@@ -89,3 +89,40 @@ def test_biri_fig7_has_no_seam_at_its_tile_borders_and_clears_the_house(renderer
     assert float(np.abs(pairs[:, 0] - pairs[:, 1]).max()) <= 1e-3
     tau = -np.log(T[-3:])
     assert float(tau[0]) <= 0.8 * float(tau[1:].min())
+
+
+def test_biri_fig6_shows_layers_not_a_uniform_haze(renderer):
+    """Biri: "complex and realistic layers of mist". At 20 m per function unit the 8 m
+    vertical period averaged out along every ray: the fog differed from homogeneous fog of
+    the same mean density (c0 times the weight) by 0.010 of T on average over the view.
+    The layers must show: a mean |dT| of at least 0.08 against that homogeneous fog
+    (0.14 at 150 m per unit, where the vertical period is 60 m)."""
+    still = preset_still("biri-fig6", width=320, height=180)
+    layer = still.layers[0]
+    _, T, _, _ = fog_only(renderer, still)
+    flat = still.model_copy(update={"layers": [
+        StillParams.model_validate({"layers": [{"kind": "homogeneous", "density": layer.density * layer.c0}]}).layers[0]]})
+    _, Th, _, _ = fog_only(renderer, flat)
+    seen = (T > 0) & (Th > 0)           # not beyond the threshold, where both are fog colour
+    assert seen.mean() > 0.5
+    assert float(np.abs(T - Th)[seen].mean()) >= 0.08
+
+
+def test_fischer_fog_is_ground_fog_along_the_river_from_hundreds_of_particles(renderer):
+    """Fischer's fog is many faint particles. The preset was one opaque blob at the bridge
+    (181 particles from one point within 8 m: min T 0.0002, fog on 0.8% of the view).
+    Now: at least 200 particles alive, 90% of them within 35 m of the river's centre line
+    and 6 m of the ground, spread over at least 120 m along it; nowhere opaque (min T
+    >= 0.2) and fog (T < 0.9) on at least 10% of the view."""
+    from fogbank.kinds.particles import simulate_state
+    from fogbank.scene import terrain
+    still = preset_still("fischer-fog", width=320, height=180)
+    pos, _ = simulate_state(still.layers[0], still.time, still)
+    assert len(pos) >= 200
+    off = np.abs(pos[:, 0] - terrain.river_x(pos[:, 2]))
+    above = pos[:, 1] - terrain.height(pos[:, 0], pos[:, 2])
+    assert (float(np.percentile(off, 90)) <= 35.0, float(np.percentile(above, 90)) <= 6.0) == (True, True)
+    assert float(np.ptp(pos[:, 2])) >= 120.0
+    _, T, _, _ = fog_only(renderer, still)
+    assert float(T.min()) >= 0.2
+    assert float((T < 0.9).mean()) >= 0.10

@@ -75,7 +75,9 @@ def simulate(layer, t: float, wind: np.ndarray,
                       np.radians(layer.spread), uniform(layer.seed, slots, cycle, 1),
                       uniform(layer.seed, slots, cycle, 2))
     v = direction * layer.speed
-    p = np.broadcast_to(np.asarray(layer.emitter, dtype=np.float64), v.shape).copy()
+    # born uniformly in the box emitter +- emitter_size (a point when it is 0)
+    box = np.stack([uniform(layer.seed, slots, cycle, 3 + i) for i in range(3)], axis=1) * 2.0 - 1.0
+    p = np.asarray(layer.emitter, dtype=np.float64) + box * np.asarray(layer.emitter_size, dtype=np.float64)
     target = np.asarray(wind, dtype=np.float64) if layer.wind else np.zeros(3)
     dt = layer.step
     steps = np.floor(age).astype(np.int64)

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Annotated, Literal
 
 import numpy as np
 from pydantic import Field, model_validator
@@ -11,11 +11,17 @@ from fogbank.kinds.kind import Kind, Layout
 from fogbank.model.fields import MAX_PARTICLES, Direction, Int, LayerBase, Position, num
 
 
+Spread = Annotated[float, Field(strict=True, ge=0.0, le=1000.0)]
+
+
 class Particles(LayerBase):
     """Fischer: a few free-floating particles; T = prod (1 - alpha s_j clamp(1 - dist_j/R, 0, 1))."""
     kind: Literal["particles"] = "particles"
     count: Int = Field(120, ge=1, le=MAX_PARTICLES, description="particles alive at once (slots)")
     emitter: Position = Field((10.0, 2.0, 0.0), description="where particles are born, m")
+    emitter_size: tuple[Spread, Spread, Spread] = Field(
+        (0.0, 0.0, 0.0), description="half-extents of the box round the emitter where particles "
+                                     "are born, uniformly (0: a point), m")
     direction: Direction = Field((0.0, 1.0, 0.0), description="mean launch direction")
     spread: float = num(25.0, 0, 180, 1, "deg", "cone half-angle around direction")
     speed: float = num(1.5, 0, 50, 0.1, "m/s", "launch speed")
@@ -84,7 +90,8 @@ def reference(layer, O, omega, d, t, env):
 
 
 def sample(rng):
-    return Particles(count=int(rng.integers(1, 200)), emitter=tuple(rng.normal(size=3) * 5),
+    size = tuple(rng.uniform(0, 20, 3)) if rng.random() < 0.5 else (0.0, 0.0, 0.0)
+    return Particles(count=int(rng.integers(1, 200)), emitter=tuple(rng.normal(size=3) * 5), emitter_size=size,
                      direction=tuple(rng.normal(size=3)), spread=rng.uniform(0, 90),
                      speed=rng.uniform(0, 3), radius=rng.uniform(1, 8), alpha=rng.uniform(0, 1),
                      life_min=8, life_max=int(rng.integers(8, 64)), step=rng.uniform(0.05, 0.5),

@@ -22,7 +22,7 @@ def _house_chimney() -> tuple[float, float, float]:
     return (hx + 2.65, hy + 7.2, hz - 0.75)
 
 
-def _biri_fig6_layer(density: float = 0.012, scale: float = 20.0) -> dict:
+def _biri_fig6_layer(density: float = 0.012, scale: float = 150.0) -> dict:
     # K = 1 + 1/2 cos(5 pi y) + 1/5 cos(7 pi (y + 0.1 x)) + 1/5 cos(5 pi (y - 0.05 x))
     #       + 1/10 cos(pi x) cos(pi z / 2)      (the product expanded into two cosines)
     return {"kind": "cosine", "density": density, "c0": 1.0, "scale": scale, "wind": True,
@@ -64,8 +64,9 @@ def _presets() -> dict[str, dict[str, Any]]:
         },
         "biri-fig6": {
             "title": "Biri et al. 2002, figure 6",
-            "description": "Fog from four cosine functions plus one constant (the product term "
-                           "expanded into two cosines), 20 m per function unit, wind-driven.",
+            "description": "Layers of mist from four cosine functions plus one constant (the "
+                           "product term expanded into two cosines), 150 m per function unit: "
+                           "dense in the valley, clear on the hilltops, tilted and drifting.",
             "params": {"camera": view, "layers": [_biri_fig6_layer()],
                        "effects": {"cutoff_distance": 500.0, "cutoff_mode": "fog"}},
         },
@@ -103,13 +104,15 @@ def _presets() -> dict[str, dict[str, Any]]:
         },
         "fischer-fog": {
             "title": "Fischer: particle fog",
-            "description": "Fog from a few hundred free particles (life 64-128 steps, max "
-                           "opacity 0.2) rising off the river at the bridge, carried by the wind.",
-            "params": {"camera": view, "time": 20.0, "wind": {"direction": 100.0, "speed": 1.2},
-                       "layers": [{"kind": "particles", "count": 240, "emitter": (bx, 0.5, bz - 10.0),
-                                   "direction": (0.0, 1.0, 0.0), "spread": 80.0, "speed": 1.0,
+            "description": "Ground fog over the river from 400 free particles born along it "
+                           "(life 64-128 steps, max opacity 0.2 each), drifting with the wind.",
+            "params": {"camera": view, "time": 40.0, "wind": {"direction": 100.0, "speed": 0.8},
+                       "layers": [{"kind": "particles", "count": 400, "emitter": (10.0, 1.5, -15.0),
+                                   "emitter_size": (16.0, 1.0, 85.0),
+                                   "direction": (0.0, 1.0, 0.0), "spread": 80.0, "speed": 0.3,
                                    "life_min": 64, "life_max": 128, "step": 0.25, "radius": 7.0,
-                                   "alpha": 0.2, "drag": 0.3, "wind": True, "seed": 11}]},
+                                   "alpha": 0.2, "drag": 0.3, "gravity": -0.02, "wind": True,
+                                   "seed": 11}]},
         },
         "fischer-smoke": {
             "title": "Fischer: chimney smoke",
