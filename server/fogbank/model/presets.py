@@ -85,13 +85,13 @@ def _presets() -> dict[str, dict[str, Any]]:
         },
         "biri-fig8": {
             "title": "Biri et al. 2002, figure 8",
-            "description": "Constant fog with four point potentials centred on trees: the mist "
+            "description": "Thin constant fog with four tight point potentials centred on trees: the mist "
                            "gathers around them.",
-            "params": {"camera": {"position": (20.0, 30.0, 30.0), "yaw": 40.0, "pitch": -14.0, "fov": 55.0},
+            "params": {"camera": {"position": (30.0, 35.0, 60.0), "yaw": 7.0, "pitch": -10.0, "fov": 55.0},
                        "effects": {"cutoff_distance": 500.0, "cutoff_mode": "fog"},
-                       "layers": [{"kind": "homogeneous", "density": 0.004}] + [
-                           {"kind": "potential", "shape": "point", "center": c, "strength": 1.2,
-                            "c": 20.0, "e": 0.12} for c in landmarks().trees]},
+                       "layers": [{"kind": "homogeneous", "density": 0.003}] + [
+                           {"kind": "potential", "shape": "point", "center": c, "strength": 0.35,
+                            "c": 2.5, "e": 0.1} for c in landmarks().trees]},
         },
         "quilez-spheres": {
             "title": "Quilez: analytic fog spheres",
