@@ -357,15 +357,27 @@ def test_a_carved_frame_equals_its_rays_and_the_reference(renderer):
     assert float(np.ptp(want)) > 0.3 and len(carved) > 100   # fog, smoke and a clearing in view
 
 
-@pytest.mark.parametrize("start", [0.0, 40.0])
-def test_gawron_scatter_color_and_start_distance(renderer, start):
+def hand_phase(phase, mu, exponent, g):
+    """The in-scattering lobe F: Gawron's max(0, mu)^e, or Henyey & Greenstein's phase
+    function (1 - g^2) / (4 pi (1 + g^2 - 2 g mu)^1.5) times 4 pi."""
+    if phase == "gawron":
+        return np.maximum(mu, 0.0) ** exponent
+    return (1 - g * g) / (1 + g * g - 2 * g * mu) ** 1.5
+
+
+@pytest.mark.parametrize("phase,start,g", [("gawron", 0.0, 0.0), ("gawron", 40.0, 0.0),
+                                           ("henyey-greenstein", 0.0, 0.7),
+                                           ("henyey-greenstein", 40.0, -0.4)])
+def test_scatter_phase_color_and_start_distance(renderer, phase, start, g):
     """Gawron eqs. 5-8 by hand: every interior pixel of the calibration scene is
-    T C + (1 - T) (C_fog + C_sun C_scatter s max(0, n . L)^e), n = p_s / |p_s|,
-    p_s = (P - eye) + ScatterStartDist added to each component; T from the reference."""
+    T C + (1 - T) (C_fog + C_sun C_scatter s F(n . L)), n = p_s / |p_s|,
+    p_s = (P - eye) + ScatterStartDist added to each component; T from the reference;
+    F Gawron's power lobe or the Henyey-Greenstein phase function (hand_phase)."""
     still = calibration_still(layers=[{"kind": "homogeneous", "density": 0.015}],
                               sun={"azimuth": 10.0, "elevation": 12.0, "color": "#fff4e0", "intensity": 2.0})
     eff = still.effects.model_copy(update={"scatter": 0.7, "scatter_exponent": 6.0,
-                                           "scatter_color": "#ff9a40", "scatter_start": start})
+                                           "scatter_color": "#ff9a40", "scatter_start": start,
+                                           "phase": phase, "anisotropy": g})
     still = still.model_copy(update={"effects": eff})
     img = renderer.render(still).astype(np.float64)
     py, px = np.mgrid[0:H, 0:W]
@@ -389,11 +401,11 @@ def test_gawron_scatter_color_and_start_distance(renderer, start):
     ps = ws * d[:, None] + start
     n = ps / np.linalg.norm(ps, axis=1, keepdims=True)
     tint = np.array(srgb_to_linear("#fff4e0")) * 2.0 * np.array(srgb_to_linear("#ff9a40")) * 0.7
-    fog = np.array(srgb_to_linear(still.fog_color)) + tint * np.maximum(n @ L, 0.0)[:, None] ** 6.0
+    glow = hand_phase(phase, n @ L, 6.0, g)
+    fog = np.array(srgb_to_linear(still.fog_color)) + tint * glow[:, None]
     want = _to_srgb(T[:, None] * scene_lin + (1 - T[:, None]) * fog)
     err = np.abs(img.reshape(-1, 3)[sel] - want)
     assert err.max() <= 2.0
-    glow = np.maximum(n @ L, 0.0) ** 6.0
     assert float(glow.max() - glow.min()) > 0.2   # the scattering lobe varies across the view
 
 

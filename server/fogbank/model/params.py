@@ -87,6 +87,12 @@ class Effects(Strict):
                                  "sunlight: in-scattered light = sun colour x intensity x this x scatter")
     scatter_start: float = num(0.0, 0, 10000, 10, "m", "Gawron eq. 5: ScatterStartDist, added to the "
                                "view vector (each component) before it is normalised")
+    phase: Literal["gawron", "henyey-greenstein"] = Field(
+        "gawron", description="in-scattering lobe: Gawron's max(0, cos)^scatter_exponent, or the "
+                              "Henyey-Greenstein phase function with anisotropy g (times 4 pi: 1 "
+                              "in every direction when g = 0)")
+    anisotropy: float = num(0.6, -0.95, 0.95, 0.01, "", "Henyey-Greenstein g: 0 scatters evenly, "
+                            "> 0 forward (a glow round the sun), < 0 back toward it")
     blur: Literal["off", "single", "separate"] = Field(
         "off", description="fog blur: off, fused with the composite, or separate passes")
     blur_radius: float = num(3.0, 0, 16, 0.25, "px", "Gaussian sigma at full fog (at 720 px high)")

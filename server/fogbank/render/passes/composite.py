@@ -38,6 +38,7 @@ class CompositePass(Pass):
             "uScatterColor": sun_color(look) * np.array(srgb_to_linear(e.scatter_color)) * e.scatter,
             "uScatterStart": e.scatter_start, "uSkyDistance": e.sky_distance,
             "uScatterExponent": e.scatter_exponent, "uBlurSigma": blur_sigma(f),
+            "uPhaseHG": e.phase == "henyey-greenstein", "uAnisotropy": e.anisotropy,
             "uMaxOpacity": e.max_opacity, "uBlurExponent": e.blur_exponent})
         f.gbuffer.color.use(TEX["uColor"])
         f.gbuffer.invdist.use(TEX["uInvDist"])

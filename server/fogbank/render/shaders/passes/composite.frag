@@ -6,6 +6,7 @@
 // 2 separate passes follow).
 #include "common/camera.glsl"
 #include "common/srgb.glsl"
+#include "common/phase.glsl"
 #include "fog/finish.glsl"
 in vec2 vUV;
 uniform sampler2D uColor;         // scene colour, linear (bilinear filtering)
@@ -17,6 +18,8 @@ uniform vec3 uSunDir;
 uniform vec3 uScatterColor;       // sun colour * intensity * scatter colour * scatter strength
 uniform float uScatterExponent;
 uniform float uScatterStart;      // m, Gawron's ScatterStartDist (eq. 5); 0 = the view ray
+uniform bool uPhaseHG;            // the lobe: Henyey-Greenstein (true) or Gawron's power
+uniform float uAnisotropy;        // Henyey-Greenstein g
 uniform float uSkyDistance;       // m, how far a sky pixel's ray runs
 uniform float uBlurSigma;         // px at full fog
 uniform float uBlurExponent;
@@ -61,10 +64,13 @@ void main() {
     vec3 w = viewRay(vUV * 2.0 - 1.0, uFwd, uRight, uUp);
     // Gawron eqs. 5-8: p_s = (WorldPos - CameraPos) + ScatterStartDist, the scalar added to
     // each component as in the paper's Listing 1; F = max(0, p_s/|p_s| . L)^exponent;
-    // C_fog + C_scatter F. With no start distance p_s/|p_s| is the view ray itself.
+    // C_fog + C_scatter F. With no start distance p_s/|p_s| is the view ray itself. With
+    // the Henyey-Greenstein phase, F = 4 pi p_HG(p_s/|p_s| . L, g) (common/phase.glsl).
     float dist = invd > 0.0 ? 1.0 / invd : uSkyDistance;
     vec3 ws = uScatterStart > 0.0 ? normalize(w * dist + vec3(uScatterStart)) : w;
-    vec3 fog = uFogColor + uScatterColor * pow(max(dot(ws, uSunDir), 0.0), uScatterExponent);
+    float mu = dot(ws, uSunDir);
+    float F = uPhaseHG ? phaseHG(mu, uAnisotropy) : pow(max(mu, 0.0), uScatterExponent);
+    vec3 fog = uFogColor + uScatterColor * F;
     vec3 scene = texelFetch(uColor, px, 0).rgb;
     if (BLUR_MODE == 1) {
         float sigma = uBlurSigma * pow(1.0 - T, uBlurExponent);
