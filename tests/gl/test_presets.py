@@ -151,3 +151,29 @@ def test_biri_fig8_mist_gathers_on_the_trees(renderer):
     tau = -np.log(T.reshape(-1, 3).astype(np.float64))
     ratio = tau[:, 0] / tau[:, 1:].mean(axis=1)
     assert int((ratio >= 1.5).sum()) >= 3
+
+
+def ray_elevations(camera, width, height):
+    """Each pixel's ray elevation above the horizon (degrees; rows bottom first), written
+    from the camera convention (pitch about the camera's x, vertical fov), not scene/camera."""
+    tan = np.tan(np.radians(camera.fov) / 2)
+    nx = (np.arange(width) + 0.5) / width * 2 - 1
+    ny = (np.arange(height) + 0.5) / height * 2 - 1
+    NX, NY = np.meshgrid(nx * tan * width / height, ny * tan)
+    p = np.radians(camera.pitch)
+    y = NY * np.cos(p) + np.sin(p)
+    back = NY * np.sin(p) - np.cos(p)
+    return np.degrees(np.arctan2(y, np.hypot(NX, back)))
+
+
+@pytest.mark.parametrize("name", ["perlin-fog", "quilez-spheres", "default"])
+def test_the_land_reaches_the_horizon(renderer, name):
+    """The terrain ended at +-220 m, and its edge showed at the horizon as a ridge and a flat
+    band of sky below it. A far skirt of the same height field runs to 3.5 km: every
+    pixel whose ray points 1 degree or more below the horizon meets the land (1/distance
+    > 0), none of them the sky."""
+    still = preset_still(name, width=320, height=180)
+    _, _, invd, _ = fog_only(renderer, still)
+    below = ray_elevations(still.camera, 320, 180) <= -1.0
+    assert below.mean() > 0.3
+    assert int((invd[below] <= 0).sum()) == 0

@@ -414,3 +414,21 @@ def test_gawron_preset_scatters_its_own_colour_from_a_start_distance():
     look = StillParams.model_validate(preset_dict("gawron-distance"))
     e = look.effects
     assert (e.scatter_start > 0, e.scatter_color != "#ffffff", look.sun.color != e.scatter_color) == (True, True, True)
+
+
+def test_output_is_dithered_so_flat_regions_average_to_their_true_value(renderer):
+    """The 8-bit output is dithered by up to half a level (interleaved gradient noise):
+    over the calibration scene's flat sky under homogeneous fog, whose exact colour v is
+    the same at every pixel and lies 0.2 levels or more from a whole level, each pixel is
+    within one level of v and their mean within 0.1 of it (plain rounding gives every pixel
+    round(v), off by the same 0.2 or more); and the same look gives the same bytes."""
+    still = calibration_still(layers=[{"kind": "homogeneous", "density": 0.0021}])
+    img = renderer.render(still).astype(np.float64)
+    assert np.array_equal(renderer.render(still), img.astype(np.uint8))
+    T = np.exp(-0.0021 * still.effects.sky_distance)
+    sky, fog = np.array(srgb_to_linear(scenes.CALIBRATION_SKY)), np.array(srgb_to_linear(still.fog_color))
+    v = _to_srgb(T * sky + (1 - T) * fog)
+    assert float(np.abs(np.round(v) - v).min()) >= 0.2
+    top = img[:40, 20:-20].reshape(-1, 3)      # sky only: the boxes and ground are lower
+    assert float(np.abs(top - v).max()) <= 1.0
+    assert float(np.abs(top.mean(axis=0) - v).max()) <= 0.1

@@ -220,15 +220,57 @@ def _trees() -> list[np.ndarray]:
     return parts
 
 
+# The land beyond the detailed terrain, out to the horizon: the same height field on a grid
+# whose cells grow by GROWTH per ring from SKIRT_INNER (under the detailed terrain's edge,
+# so no crack opens between them) to SKIRT_OUTER (within the camera's far plane).
+SKIRT_INNER = 200.0
+SKIRT_OUTER = 3500.0
+SKIRT_GROWTH = 1.3
+SKIRT_SINK = 0.4   # m: under the detailed terrain where they overlap
+
+
+def skirt_coordinates() -> np.ndarray:
+    """The grid lines of the far skirt along x (and z): symmetric, growing outward, and
+    finer than the detailed grid's edge nowhere it shows."""
+    ring = [SKIRT_INNER]
+    while ring[-1] < SKIRT_OUTER:
+        ring.append(min(ring[-1] * SKIRT_GROWTH, SKIRT_OUTER))
+    inner = np.linspace(-SKIRT_INNER, SKIRT_INNER, 9)[1:-1]
+    return np.concatenate([-np.array(ring[::-1]), inner, np.array(ring)])
+
+
+def _far_skirt() -> np.ndarray:
+    """The far land as terrain-material triangles: every cell of the skirt's grid that is
+    not wholly inside the detailed terrain, at the terrain's own height (sunk by
+    SKIRT_SINK, so that the detailed terrain wins where they overlap)."""
+    xs = skirt_coordinates()
+    X, Z = np.meshgrid(xs, xs, indexing="xy")
+    Y = terrain.height(X, Z) - SKIRT_SINK
+    N = terrain.normal(X, Z)
+    P = np.stack([X, Y, Z], axis=-1)
+    tris, nrms = [], []
+    n = len(xs)
+    for j in range(n - 1):
+        for i in range(n - 1):
+            if max(abs(xs[i]), abs(xs[i + 1])) <= SKIRT_INNER and max(abs(xs[j]), abs(xs[j + 1])) <= SKIRT_INNER:
+                continue   # inside the detailed terrain
+            a, b, c, d = (j, i), (j, i + 1), (j + 1, i), (j + 1, i + 1)
+            for t in ((a, c, b), (b, c, d)):
+                tris.extend(P[k] for k in t)
+                nrms.extend(N[k] for k in t)
+    return _tris(np.array(tris), np.array(nrms), (1.0, 1.0, 1.0), 1.0)
+
+
 @lru_cache(maxsize=2)
 def build(name: str) -> Mesh:
     if name == "calibration":
         return _calibration()
     tv, ti, tc = _terrain_grid()
     E = terrain.EXTENT
-    water = _quad((-E, terrain.WATER_LEVEL, E), (E, terrain.WATER_LEVEL, E),
-                  (E, terrain.WATER_LEVEL, -E), (-E, terrain.WATER_LEVEL, -E), _rgb("#0e2a30"), 2.0)
-    objects = np.concatenate([water] + _house() + _bridge() + _trees())
+    F = SKIRT_OUTER
+    water = _quad((-F, terrain.WATER_LEVEL, F), (F, terrain.WATER_LEVEL, F),
+                  (F, terrain.WATER_LEVEL, -F), (-F, terrain.WATER_LEVEL, -F), _rgb("#0e2a30"), 2.0)
+    objects = np.concatenate([water, _far_skirt()] + _house() + _bridge() + _trees())
     return Mesh(tv, ti, tc, objects, (np.array([0.0, 5.0, 0.0]), E * 1.05))
 
 

@@ -24,5 +24,5 @@ void main() {
         }
         c = acc / wsum;
     }
-    fColor = uFinal ? vec4(linearToSrgb(c), 1.0) : vec4(c, centre.a);
+    fColor = uFinal ? vec4(outputColor(c, floor(px)), 1.0) : vec4(c, centre.a);
 }

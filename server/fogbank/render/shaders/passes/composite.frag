@@ -84,5 +84,5 @@ void main() {
     }
     vec3 c = T * scene + (1.0 - T) * fog;
     if (BLUR_MODE == 2) fColor = vec4(c, 1.0 - T);     // linear, fog amount for the blur
-    else fColor = vec4(linearToSrgb(c), 1.0);
+    else fColor = vec4(outputColor(c, vec2(px)), 1.0);
 }
