@@ -21,6 +21,12 @@ def _to_srgb(c):
     return np.where(c <= 0.0031308, c * 12.92, 1.055 * c ** (1 / 2.4) - 0.055) * 255
 
 
+def srgb_to_linear_array(img):
+    """8-bit sRGB pixels to linear light (IEC 61966-2-1), float64."""
+    c = np.asarray(img, dtype=np.float64) / 255.0
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+
+
 def hand_rotation(camera):
     """The camera's orientation from its documented convention, written with scipy's
     rotations and not with scene/camera.py: yaw 0 looks along -z and a positive yaw
@@ -432,3 +438,41 @@ def test_output_is_dithered_so_flat_regions_average_to_their_true_value(renderer
     top = img[:40, 20:-20].reshape(-1, 3)      # sky only: the boxes and ground are lower
     assert float(np.abs(top - v).max()) <= 1.0
     assert float(np.abs(top.mean(axis=0) - v).max()) <= 0.1
+
+
+def test_sunlight_through_fog_is_dimmed_by_the_closed_forms_toward_the_sun(renderer):
+    """effects.sun_through_fog: a surface's direct sunlight is multiplied by the fog's
+    transmittance from it toward the sun over the sky distance. An ellipsoid cloud hangs
+    above the eye (y 45-95 m), so no ground pixel's view ray meets fog (T = 1 there) while
+    their rays toward the sun cross it. Each ground pixel is then A + T_sun S, where A is the
+    same pixel with the sun's intensity at 0 (ambient only), A + S the pixel without
+    sun_through_fog, and T_sun the float64 reference along the sun's direction from the
+    pixel's surface point (hand-written camera, distance from the fog pass)."""
+    from fogbank.render.probes import fog_only
+    look = {"width": W, "height": H, "time": 0.0,
+            "camera": {"position": (-15.0, 34.0, 95.0), "yaw": 5.0, "pitch": -18.0, "fov": 50.0},
+            "sun": {"azimuth": 200.0, "elevation": 35.0, "color": "#fff1d6", "intensity": 3.0},
+            "effects": {"scatter": 0.0, "sky_distance": 600.0},
+            "layers": [{"kind": "ellipsoid", "center": (-15.0, 70.0, -20.0), "radii": (160.0, 25.0, 160.0),
+                        "density": 0.03}]}
+    lit = StillParams.model_validate(look)
+    dimmed = StillParams.model_validate({**look, "effects": {**look["effects"], "sun_through_fog": True}})
+    dark = StillParams.model_validate({**look, "sun": {**look["sun"], "intensity": 0.0}})
+    lin = [srgb_to_linear_array(renderer.render(s)) for s in (lit, dimmed, dark)]
+    _, Tview, invd, _ = fog_only(renderer, dimmed)
+    py, px = np.mgrid[0:H, 0:W]
+    w = hand_rays(lit.camera, px.ravel(), (H - 1 - py).ravel(), W, H)
+    invd = invd[::-1].ravel().astype(np.float64)
+    ground = (invd > 0) & (Tview[::-1].ravel() == 1.0)
+    assert ground.mean() > 0.5
+    eye = np.asarray(lit.camera.position, dtype=np.float64)
+    P = eye + w[ground] / invd[ground, None]
+    L = np.broadcast_to(lit.sun.direction(), P.shape)
+    Tsun = reference(lit.fog(), P, L, np.full(len(P), 600.0), 0.0)
+    assert float(np.mean(Tsun < 0.7)) > 0.3 and float(np.mean(Tsun > 0.95)) > 0.02   # cloud shadow and light
+    A, C = lin[2].reshape(-1, 3)[ground], lin[0].reshape(-1, 3)[ground]
+    want = _to_srgb(A + Tsun[:, None] * (C - A))
+    got = _to_srgb(lin[1].reshape(-1, 3)[ground])
+    err = np.abs(got - want)
+    assert float(np.percentile(err, 99)) <= 1.5
+    assert float((C - A).mean()) > 0.05       # the sun lights the ground: the test can tell

@@ -93,6 +93,10 @@ class Effects(Strict):
                               "in every direction when g = 0)")
     anisotropy: float = num(0.6, -0.95, 0.95, 0.01, "", "Henyey-Greenstein g: 0 scatters evenly, "
                             "> 0 forward (a glow round the sun), < 0 back toward it")
+    sun_through_fog: bool = Field(
+        False, description="dim the sunlight on each surface by the fog between it and the sun: "
+                           "the density layers' closed forms along the sun's direction for "
+                           "sky_distance metres (shadows soften under dense fog)")
     blur: Literal["off", "single", "separate"] = Field(
         "off", description="fog blur: off, fused with the composite, or separate passes")
     blur_radius: float = num(3.0, 0, 16, 0.25, "px", "Gaussian sigma at full fog (at 720 px high)")

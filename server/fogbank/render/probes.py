@@ -31,5 +31,5 @@ def fog_only(r, still, raymarch_steps: int | None = None, read: bool = True):
     if not read:
         return ms
     tex = f.fog_tex
-    a = np.frombuffer(tex.read(), np.float32).reshape(tex.height, tex.width, 2)
+    a = np.frombuffer(tex.read(), np.float32).reshape(tex.height, tex.width, tex.components)
     return ms, a[..., 0].copy(), a[..., 1].copy(), f.view

@@ -46,9 +46,12 @@ class Programs:
         """An attribute-less draw (a fullscreen triangle, or instanced quads)."""
         self.vaos[prog].render(mode, vertices=vertices, instances=instances)
 
-    def fog(self, layers: tuple, scale: int, raymarch_steps: int | None = None):
+    def fog(self, layers: tuple, scale: int, raymarch_steps: int | None = None, sun: bool = False):
         """The fog pass; particles are left to the quads pass. With raymarch_steps, the
-        exponential layers are raymarched instead (the benchmark's comparison)."""
+        exponential layers are raymarched instead (the benchmark's comparison); with sun,
+        it also integrates each visible point's fog toward the sun."""
         extra = {"RAYMARCH_STEPS": raymarch_steps} if raymarch_steps else {}
+        if sun and not raymarch_steps:
+            extra["SUN_THROUGH_FOG"] = 1
         return self.get(FULLSCREEN, "passes/fog.frag", layers, inline_particles=False,
                         FOG_SCALE=scale, **extra)

@@ -13,9 +13,10 @@ from fogbank.render.gl import release_fbo
 MSAA_SAMPLES = 4
 # bytes per pixel of each GPU allocation (for the caches' byte budgets and the cost model)
 OUT_BPP = 4                                   # RGBA8 output renderbuffer
-MSAA_BPP = MSAA_SAMPLES * (8 + 4 + 4)         # RGBA16F + R32F + depth24/stencil8, per sample
+MSAA_BPP = MSAA_SAMPLES * (8 + 4 + 8 + 4)     # RGBA16F + R32F + RGBA16F + depth24/stencil8, per sample
 LINEAR_BPP = 2 * 8                            # two RGBA16F blur targets
-GBUFFER_BPP = 8 + 4 + 4                       # RGBA16F colour, R32F inverse distance, depth
+GBUFFER_BPP = 8 + 4 + 8 + 4                   # RGBA16F colour, R32F 1/distance, RGBA16F sunlight, depth
+FOG_BPP = 12                                  # RGB32F (raw T, 1/distance, T toward the sun)
 
 
 @dataclass
@@ -35,7 +36,7 @@ class Targets:
         if self.msaa_fbo is not None:
             n += w * h * MSAA_BPP
         for scale in self.fog:
-            n += -(-w // scale) * -(-h // scale) * 8
+            n += -(-w // scale) * -(-h // scale) * FOG_BPP
         n += len(self.linear) * w * h * 8
         return n
 
@@ -47,20 +48,23 @@ class Targets:
         self.msaa_fbo = None
 
     def msaa(self) -> moderngl.Framebuffer:
-        """Colour (RGBA16F), inverse distance (R32F) and depth, MSAA_SAMPLES per pixel."""
+        """Colour (RGBA16F), inverse distance (R32F), direct sunlight (RGBA16F) and depth,
+        MSAA_SAMPLES per pixel."""
         if self.msaa_fbo is None:
             ctx, size = self.ctx, self.size
             self.msaa_fbo = ctx.framebuffer(
                 color_attachments=[ctx.renderbuffer(size, 4, samples=MSAA_SAMPLES, dtype="f2"),
-                                   ctx.renderbuffer(size, 1, samples=MSAA_SAMPLES, dtype="f4")],
+                                   ctx.renderbuffer(size, 1, samples=MSAA_SAMPLES, dtype="f4"),
+                                   ctx.renderbuffer(size, 4, samples=MSAA_SAMPLES, dtype="f2")],
                 depth_attachment=ctx.depth_renderbuffer(size, samples=MSAA_SAMPLES))
         return self.msaa_fbo
 
     def fog_target(self, scale: int):
-        """(framebuffer, texture) of (raw T, 1/distance) at 1/scale of the frame."""
+        """(framebuffer, texture) of (raw T, 1/distance, T toward the sun) at 1/scale of
+        the frame."""
         if scale not in self.fog:
             w, h = self.size
-            tex = self.ctx.texture((-(-w // scale), -(-h // scale)), 2, dtype="f4")
+            tex = self.ctx.texture((-(-w // scale), -(-h // scale)), 3, dtype="f4")
             tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
             self.fog[scale] = (self.ctx.framebuffer(color_attachments=[tex]), tex)
         return self.fog[scale]
@@ -76,11 +80,13 @@ class Targets:
 
 @dataclass
 class GBuffer:
-    """A cached scene pass (colour and inverse distance) for one slot (a streaming session,
-    or stills) and size; redrawn only when scene, camera, sun or MSAA change."""
-    fbo: moderngl.Framebuffer      # colour + inverse distance + single-sample depth
+    """A cached scene pass (colour, inverse distance, direct sunlight) for one slot (a
+    streaming session, or stills) and size; redrawn only when scene, camera, sun or MSAA
+    change."""
+    fbo: moderngl.Framebuffer      # colour + inverse distance + sunlight + single-sample depth
     color: moderngl.Texture
     invdist: moderngl.Texture
+    sunlight: moderngl.Texture
     scene_key: object = None
 
     def nbytes(self) -> int:
@@ -115,9 +121,11 @@ class TargetCache:
             color.repeat_x = color.repeat_y = False
             invdist = ctx.texture((w, h), 1, dtype="f4")
             invdist.filter = (moderngl.NEAREST, moderngl.NEAREST)
-            fbo = ctx.framebuffer(color_attachments=[color, invdist],
+            sunlight = ctx.texture((w, h), 4, dtype="f2")
+            sunlight.repeat_x = sunlight.repeat_y = False
+            fbo = ctx.framebuffer(color_attachments=[color, invdist, sunlight],
                                   depth_attachment=ctx.depth_renderbuffer((w, h)))
-            return GBuffer(fbo, color, invdist)
+            return GBuffer(fbo, color, invdist, sunlight)
         return self._gbuffers.get((slot, w, h), make)
 
     def trim(self, keep_targets=(), keep_gbuffers=()) -> None:

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from fogbank.kinds import KINDS
 from fogbank.kinds.packing import enabled, uses_noise, variant
 from fogbank.model.params import FogParams, StillParams
-from fogbank.render.targets import GBUFFER_BPP, LINEAR_BPP, MSAA_BPP, OUT_BPP
+from fogbank.render.targets import FOG_BPP, GBUFFER_BPP, LINEAR_BPP, MSAA_BPP, OUT_BPP
 
 # seconds on the reference machine
 SCENE_FIXED_S = 0.10          # shadow map check, terrain vertex work, programs
@@ -90,7 +90,7 @@ def estimate(still: StillParams, msaa: bool = True, fmt: str = "jpg", scale: flo
     if not compiled:
         key = variant(still)
         parts[f"compiling the fog program for {len(key)} layers (once per worker)"] = jit_seconds(key)
-    memory = px * (OUT_BPP + GBUFFER_BPP + 3 + 4) + int(fog_mpx * 1e6) * 8
+    memory = px * (OUT_BPP + GBUFFER_BPP + 3 + 4) + int(fog_mpx * 1e6) * FOG_BPP
     if msaa:
         memory += px * MSAA_BPP
     if e.blur == "separate":

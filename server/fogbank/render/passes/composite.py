@@ -23,7 +23,7 @@ def blur_sigma(f) -> float:
 
 class CompositePass(Pass):
     name = "composite"
-    reads = ("gbuffer.color", "gbuffer.invdist", "fog", "view")
+    reads = ("gbuffer.color", "gbuffer.invdist", "gbuffer.sunlight", "fog", "view")
     writes = ("out", "linear")
 
     def run(self, r, f) -> None:
@@ -42,6 +42,7 @@ class CompositePass(Pass):
             "uMaxOpacity": e.max_opacity, "uBlurExponent": e.blur_exponent})
         f.gbuffer.color.use(TEX["uColor"])
         f.gbuffer.invdist.use(TEX["uInvDist"])
+        f.gbuffer.sunlight.use(TEX["uSunLight"])
         f.fog_tex.use(TEX["uFog"])
         if mode == BLUR_MODES["separate"]:
             f.targets.linear_pair()[0][0].use()

@@ -34,11 +34,11 @@ class FogPass(Pass):
         fbo, tex = f.targets.fog_target(e.fog_scale)
         fbo.use()
         plan = f.fog_plan()
-        prog = r.programs.fog(plan.key, e.fog_scale, f.raymarch_steps)
+        prog = r.programs.fog(plan.key, e.fog_scale, f.raymarch_steps, e.sun_through_fog)
         bind_fog(r, prog, plan)
         v = f.view
         set_uniforms(prog, {"uFwd": v.fwd, "uRight": v.right, "uUp": v.up,
-                            "uSkyDistance": e.sky_distance})
+                            "uSkyDistance": e.sky_distance, "uSunDir": f.still.sun.direction()})
         f.gbuffer.invdist.use(TEX["uInvDist"])
         r.programs.draw(prog, moderngl.TRIANGLES)
         f.fog_tex = tex

@@ -16,7 +16,7 @@ from fogbank.render.resources import SHADOW_SIZE
 class ScenePass(Pass):
     name = "scene"
     reads = ("meshes", "shadow_map", "view", "scene_target")
-    writes = ("scene_target", "gbuffer.color", "gbuffer.invdist")
+    writes = ("scene_target", "gbuffer.color", "gbuffer.invdist", "gbuffer.sunlight")
 
     def run(self, r, f) -> None:
         if f.scene_cached:
@@ -41,5 +41,5 @@ class ScenePass(Pass):
                 scene_vao.render(moderngl.TRIANGLES)
         ctx.disable(moderngl.DEPTH_TEST)
         if f.msaa:
-            ctx.copy_framebuffer(f.gbuffer.fbo, target)  # MSAA resolve of both colour attachments
+            ctx.copy_framebuffer(f.gbuffer.fbo, target)  # MSAA resolve of every colour attachment
         f.gbuffer.scene_key = f.scene_key

@@ -1,5 +1,6 @@
-// Shades the scene into the G-buffer: linear colour and the inverse of the distance from
-// the eye (1/m; 0 is the sky). Materials: 0 vertex colour, 1 terrain (procedural grass,
+// Shades the scene into the G-buffer: linear colour, the inverse of the distance from
+// the eye (1/m; 0 is the sky), and the part of the colour that is direct sunlight (linear;
+// the composite dims it by the fog toward the sun when effects.sun_through_fog is on). Materials: 0 vertex colour, 1 terrain (procedural grass,
 // road, banks, rock), 2 water, 3 unlit (calibration scene: colour out = albedo exactly).
 #include "common/sky.glsl"
 #include "scene/terrain_albedo.glsl"
@@ -15,6 +16,7 @@ uniform sampler2DShadow uShadow;
 uniform float uShadowTexel;
 layout(location = 0) out vec4 fColor;
 layout(location = 1) out float fInvDist;
+layout(location = 2) out vec4 fSunLight;
 
 // Percentage-closer filter over the shadow map; 1 = lit. The sampler filters linearly,
 // so each tap is a bilinear 2x2 comparison: four taps half a texel apart cover 3x3
@@ -35,7 +37,7 @@ float sunVisibility(vec3 n) {
 void main() {
     float dist = length(vPos - uEye);
     fInvDist = 1.0 / max(dist, 1e-4);  // 1e-4 m: a fragment at the eye is not "sky"
-    if (vMaterial == 3) { fColor = vec4(vColor, 1.0); return; }
+    if (vMaterial == 3) { fColor = vec4(vColor, 1.0); fSunLight = vec4(0.0); return; }
     vec3 n = normalize(vNormal);
     if (!gl_FrontFacing) n = -n;
     vec3 albedo = vColor;
@@ -45,12 +47,15 @@ void main() {
     vec3 skyAmbient = vec3(0.30, 0.36, 0.46);
     vec3 groundAmbient = vec3(0.16, 0.15, 0.12);
     vec3 ambient = mix(groundAmbient, skyAmbient, n.y * 0.5 + 0.5);
-    vec3 c = albedo * (uSunColor * sunAmount * 0.55 + ambient);
+    vec3 sun = albedo * uSunColor * sunAmount * 0.55;
+    vec3 c = sun + albedo * ambient;
     if (vMaterial == 2) {
         // water: dark body plus a Fresnel (Schlick, F0 = 0.02) reflection of the sky
         vec3 r = reflect(w, vec3(0.0, 1.0, 0.0));
         float f = 0.02 + 0.98 * pow(1.0 - max(dot(-w, vec3(0.0, 1.0, 0.0)), 0.0), 5.0);
         c = mix(c, skyColor(r, uSunDir, uSunColor) * 0.8, f);
+        sun *= 1.0 - f;
     }
     fColor = vec4(c, 1.0);
+    fSunLight = vec4(sun, 1.0);
 }

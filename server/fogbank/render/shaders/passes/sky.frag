@@ -10,8 +10,10 @@ uniform bool uFlatSky;
 uniform vec3 uFlatSkyColor;
 layout(location = 0) out vec4 fColor;
 layout(location = 1) out float fInvDist;
+layout(location = 2) out vec4 fSunLight;   // the direct sunlight of a surface: none here
 void main() {
     vec3 w = viewRay(vUV * 2.0 - 1.0, uFwd, uRight, uUp);
     fColor = vec4(uFlatSky ? uFlatSkyColor : skyColor(w, uSunDir, uSunColor), 1.0);
     fInvDist = 0.0;
+    fSunLight = vec4(0.0);
 }
