@@ -44,17 +44,20 @@ def _presets() -> dict[str, dict[str, Any]]:
              "radius": 1.6, "alpha": 0.85, "drag": 0.35, "gravity": 0.3, "wind": True, "seed": 3}
     return {
         "default": {
-            "title": "Morning valley",
-            "description": "Ground mist pooled in the river valley (height fog), drifting "
-                           "Biri cosine layers, denser air in the forest (a point potential), "
-                           "chimney smoke, low sun scattering through it.",
+            "title": "Valley mist at sunrise",
+            "description": "A low sun through ground mist pooled in the river valley (height fog), "
+                           "drifting Biri cosine layers, denser air in the forest (a point "
+                           "potential) and chimney smoke; Henyey-Greenstein in-scattering, the "
+                           "sunlight dimmed by the fog, and sampled light shafts between the trees.",
             "params": {
-                "camera": view, "fog_color": "#c9d1db",
-                "sun": {"azimuth": 55.0, "elevation": 16.0, "color": "#ffe3b8", "intensity": 3.2},
-                "effects": {"scatter": 0.12, "scatter_exponent": 12.0, "sky_distance": 350.0,
+                "camera": {"position": (-35.0, 36.0, 85.0), "yaw": 30.0, "pitch": -11.0, "fov": 60.0},
+                "fog_color": "#aab6c2",
+                "sun": {"azimuth": 30.0, "elevation": 9.0, "color": "#ffd9a8", "intensity": 3.4},
+                "effects": {"phase": "henyey-greenstein", "anisotropy": 0.6, "scatter": 0.04,
+                            "shafts": 1.0, "sun_through_fog": True, "sky_distance": 400.0,
                             "fog_scale": 1},
                 "layers": [
-                    {"kind": "height", "density": 0.035, "falloff": 0.2, "base": 1.0},
+                    {"kind": "height", "density": 0.025, "falloff": 0.2, "base": 1.0},
                     _biri_fig6_layer(0.0025, 24.0),
                     {"kind": "potential", "shape": "point", "center": (fx, fy, fz), "strength": 0.6,
                      "c": 30.0, "e": 0.05},

@@ -30,6 +30,20 @@ def fog_only(r, still, raymarch_steps: int | None = None, read: bool = True):
     ms = (time.perf_counter() - t0) * 1000.0
     if not read:
         return ms
-    tex = f.fog_tex
-    a = np.frombuffer(tex.read(), np.float32).reshape(tex.height, tex.width, tex.components)
+    a = fog_texels(f)
     return ms, a[..., 0].copy(), a[..., 1].copy(), f.view
+
+
+def fog_texels(f) -> np.ndarray:
+    """A drawn frame's fog target, bottom row first: (raw T, 1/distance, T toward the sun,
+    lit share of the view ray) per texel."""
+    tex = f.fog_tex
+    return np.frombuffer(tex.read(), np.float32).reshape(tex.height, tex.width, tex.components)
+
+
+def fog_target(r, still) -> np.ndarray:
+    """fog_only's passes, then the whole fog target (fog_texels)."""
+    f = r.begin(still, slot="bench", msaa=True)
+    for p in (ShadowPass(), SkyPass(), ScenePass(), FogPass(), ParticlesPass()):
+        p.run(r, f)
+    return fog_texels(f)

@@ -15,6 +15,9 @@ FULLSCREEN = "passes/fullscreen.vert"
 MAX_VARIANTS = 48
 
 
+SHAFT_SAMPLES = 32   # shadow-map samples per view ray for light shafts
+
+
 class Programs:
     def __init__(self, ctx):
         self.ctx = ctx
@@ -46,12 +49,16 @@ class Programs:
         """An attribute-less draw (a fullscreen triangle, or instanced quads)."""
         self.vaos[prog].render(mode, vertices=vertices, instances=instances)
 
-    def fog(self, layers: tuple, scale: int, raymarch_steps: int | None = None, sun: bool = False):
+    def fog(self, layers: tuple, scale: int, raymarch_steps: int | None = None, sun: bool = False,
+            shafts: bool = False):
         """The fog pass; particles are left to the quads pass. With raymarch_steps, the
         exponential layers are raymarched instead (the benchmark's comparison); with sun,
-        it also integrates each visible point's fog toward the sun."""
+        it also integrates each visible point's fog toward the sun; with shafts, it samples
+        the shadow map along each view ray (SHAFT_SAMPLES)."""
         extra = {"RAYMARCH_STEPS": raymarch_steps} if raymarch_steps else {}
         if sun and not raymarch_steps:
             extra["SUN_THROUGH_FOG"] = 1
+        if shafts:
+            extra["SHAFTS"] = SHAFT_SAMPLES
         return self.get(FULLSCREEN, "passes/fog.frag", layers, inline_particles=False,
                         FOG_SCALE=scale, **extra)

@@ -16,7 +16,7 @@ OUT_BPP = 4                                   # RGBA8 output renderbuffer
 MSAA_BPP = MSAA_SAMPLES * (8 + 4 + 8 + 4)     # RGBA16F + R32F + RGBA16F + depth24/stencil8, per sample
 LINEAR_BPP = 2 * 8                            # two RGBA16F blur targets
 GBUFFER_BPP = 8 + 4 + 8 + 4                   # RGBA16F colour, R32F 1/distance, RGBA16F sunlight, depth
-FOG_BPP = 12                                  # RGB32F (raw T, 1/distance, T toward the sun)
+FOG_BPP = 16                                  # RGBA32F (raw T, 1/distance, T toward the sun, lit share)
 
 
 @dataclass
@@ -60,11 +60,11 @@ class Targets:
         return self.msaa_fbo
 
     def fog_target(self, scale: int):
-        """(framebuffer, texture) of (raw T, 1/distance, T toward the sun) at 1/scale of
-        the frame."""
+        """(framebuffer, texture) of (raw T, 1/distance, T toward the sun, lit share of the
+        view ray) at 1/scale of the frame."""
         if scale not in self.fog:
             w, h = self.size
-            tex = self.ctx.texture((-(-w // scale), -(-h // scale)), 3, dtype="f4")
+            tex = self.ctx.texture((-(-w // scale), -(-h // scale)), 4, dtype="f4")
             tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
             self.fog[scale] = (self.ctx.framebuffer(color_attachments=[tex]), tex)
         return self.fog[scale]

@@ -39,6 +39,7 @@ class CompositePass(Pass):
             "uScatterStart": e.scatter_start, "uSkyDistance": e.sky_distance,
             "uScatterExponent": e.scatter_exponent, "uBlurSigma": blur_sigma(f),
             "uPhaseHG": e.phase == "henyey-greenstein", "uAnisotropy": e.anisotropy,
+            "uShafts": e.shafts,
             "uMaxOpacity": e.max_opacity, "uBlurExponent": e.blur_exponent})
         f.gbuffer.color.use(TEX["uColor"])
         f.gbuffer.invdist.use(TEX["uInvDist"])

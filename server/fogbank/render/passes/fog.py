@@ -26,7 +26,7 @@ def bind_fog(r, prog, plan) -> None:
 
 class FogPass(Pass):
     name = "fog"
-    reads = ("gbuffer.invdist", "fog_plan", "view")
+    reads = ("gbuffer.invdist", "fog_plan", "view", "shadow_map")
     writes = ("fog",)
 
     def run(self, r, f) -> None:
@@ -34,11 +34,18 @@ class FogPass(Pass):
         fbo, tex = f.targets.fog_target(e.fog_scale)
         fbo.use()
         plan = f.fog_plan()
-        prog = r.programs.fog(plan.key, e.fog_scale, f.raymarch_steps, e.sun_through_fog)
+        shafts = e.shafts > 0
+        prog = r.programs.fog(plan.key, e.fog_scale, f.raymarch_steps, e.sun_through_fog, shafts)
         bind_fog(r, prog, plan)
         v = f.view
         set_uniforms(prog, {"uFwd": v.fwd, "uRight": v.right, "uUp": v.up,
                             "uSkyDistance": e.sky_distance, "uSunDir": f.still.sun.direction()})
+        if shafts:
+            _, (_, half), _ = r.meshes.get(f.still.scene)
+            # the shadow map spans the scene's bounds (2 half); beyond, nothing is shadowed
+            set_uniforms(prog, {"uSunViewProj": f.sun_view_proj, "uEye": v.eye,
+                                "uShaftLength": min(e.sky_distance, 2.0 * half)})
+            r.shadow.tex.use(TEX["uShadow"])
         f.gbuffer.invdist.use(TEX["uInvDist"])
         r.programs.draw(prog, moderngl.TRIANGLES)
         f.fog_tex = tex

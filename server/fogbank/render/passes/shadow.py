@@ -1,5 +1,7 @@
 """The sun's shadow map: depth of every mesh seen from the sun (orthographic), redrawn
-only when the scene or the sun changes."""
+only when the scene or the sun changes. A cached scene pass needs no shadow map, but
+light shafts sample it in the fog pass, so then it is made current all the same (one map
+serves every slot of the worker)."""
 
 from __future__ import annotations
 
@@ -16,12 +18,12 @@ class ShadowPass(Pass):
     writes = ("shadow_map",)
 
     def run(self, r, f) -> None:
-        if f.scene_cached:
-            return
         look = f.still
         vaos, bounds, _ = r.meshes.get(look.scene)
         center, half = bounds
         f.sun_view_proj = cam.ortho_sun(look.sun.direction(), center, half)
+        if f.scene_cached and look.effects.shafts <= 0:
+            return
         key = (look.scene, look.sun.azimuth, look.sun.elevation)
         if key == r.shadow.key:
             return

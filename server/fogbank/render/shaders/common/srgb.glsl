@@ -5,10 +5,10 @@ vec3 linearToSrgb(vec3 c) {
 }
 
 // The 8-bit output: sRGB-encoded, dithered by up to half a level either way with
-// interleaved gradient noise (Jimenez 2014) at the pixel px, so that smooth gradients (the
-// sky round the sun) average to their true value instead of banding into 1-level rings.
-// The noise depends on the pixel alone: the same look renders the same bytes.
+// interleaved gradient noise at the pixel px (common/dither.glsl), so that smooth
+// gradients (the sky round the sun) average to their true value instead of banding into
+// 1-level rings.
+#include "common/dither.glsl"
 vec3 outputColor(vec3 linear, vec2 px) {
-    float n = fract(52.9829189 * fract(dot(px, vec2(0.06711056, 0.00583715))));
-    return linearToSrgb(linear) + (n - 0.5) / 255.0;
+    return linearToSrgb(linear) + (interleavedGradientNoise(px) - 0.5) / 255.0;
 }

@@ -11,7 +11,8 @@
 in vec2 vUV;
 uniform sampler2D uColor;         // scene colour, linear (bilinear filtering)
 uniform sampler2D uInvDist;       // full-resolution 1/distance
-uniform sampler2D uFog;           // (raw T, 1/distance, T toward the sun) at 1/FOG_SCALE size
+uniform sampler2D uFog;           // (raw T, 1/distance, T toward the sun, lit share) at 1/FOG_SCALE size
+uniform float uShafts;            // how much the view ray's shadowed share takes from the in-scattering
 uniform sampler2D uSunLight;      // the direct sunlight in the scene colour, linear
 uniform vec3 uFwd, uRight, uUp;
 uniform vec3 uFogColor;           // linear
@@ -31,27 +32,27 @@ const float K5[5] = float[5](0.054488685, 0.244201342, 0.402619947, 0.244201342,
 
 // Depth-aware upsample (Biri 4.3; "nearest-depth" joint bilateral): the four nearest fog
 // texels weighted bilinearly and by how close their surface is to this pixel's; the raw
-// T and the T toward the sun alike.
-vec2 fogT(ivec2 px, float invd) {
+// T, the T toward the sun and the lit share alike.
+vec3 fogT(ivec2 px, float invd) {
 #if FOG_SCALE == 1
-    return texelFetch(uFog, px, 0).rb;
+    return texelFetch(uFog, px, 0).rba;
 #else
     ivec2 size = textureSize(uFog, 0);
     vec2 p = (vec2(px) + 0.5) / float(FOG_SCALE) - 0.5;
     ivec2 i0 = ivec2(floor(p));
     vec2 f = p - vec2(i0);
-    vec2 acc = vec2(0.0), bestT = vec2(1.0);
+    vec3 acc = vec3(0.0), bestT = vec3(1.0);
     float wsum = 0.0, best = 1e9;
     for (int y = 0; y < 2; ++y) {
         for (int x = 0; x < 2; ++x) {
-            vec3 s = texelFetch(uFog, clamp(i0 + ivec2(x, y), ivec2(0), size - 1), 0).rgb;
+            vec4 s = texelFetch(uFog, clamp(i0 + ivec2(x, y), ivec2(0), size - 1), 0);
             // relative depth difference in [0, 1]; 1e-6 1/m keeps sky-vs-sky at 0
             float rel = abs(s.g - invd) / max(max(s.g, invd), 1e-6);
             float wb = (x == 1 ? f.x : 1.0 - f.x) * (y == 1 ? f.y : 1.0 - f.y);
             float w = wb * exp(-rel * rel * 400.0);   // ~5% difference halves the weight
-            acc += w * s.rb;
+            acc += w * s.rba;
             wsum += w;
-            if (rel < best) { best = rel; bestT = s.rb; }
+            if (rel < best) { best = rel; bestT = s.rba; }
         }
     }
     // no neighbour on this surface (a thin object): take the closest in depth
@@ -63,7 +64,7 @@ void main() {
     ivec2 px = ivec2(gl_FragCoord.xy);
     vec2 full = vec2(textureSize(uColor, 0));
     float invd = texelFetch(uInvDist, px, 0).r;
-    vec2 Ts = fogT(px, invd);
+    vec3 Ts = fogT(px, invd);
     float T = fogFinish(Ts.x);
     float sunLoss = 1.0 - Ts.y;   // the share of the direct sunlight the fog takes away
     vec3 w = viewRay(vUV * 2.0 - 1.0, uFwd, uRight, uUp);
@@ -75,7 +76,7 @@ void main() {
     vec3 ws = uScatterStart > 0.0 ? normalize(w * dist + vec3(uScatterStart)) : w;
     float mu = dot(ws, uSunDir);
     float F = uPhaseHG ? phaseHG(mu, uAnisotropy) : pow(max(mu, 0.0), uScatterExponent);
-    vec3 fog = uFogColor + uScatterColor * F;
+    vec3 fog = uFogColor + uScatterColor * F * mix(1.0, Ts.z, uShafts);
     vec3 scene = texelFetch(uColor, px, 0).rgb - sunLoss * texelFetch(uSunLight, px, 0).rgb;
     if (BLUR_MODE == 1) {
         float sigma = uBlurSigma * pow(1.0 - T, uBlurExponent);

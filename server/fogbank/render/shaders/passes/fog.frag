@@ -4,16 +4,45 @@
 // composite applies global density and max opacity, after the particle quads have
 // multiplied theirs in), the inverse distance used, for the depth-aware upsample, and,
 // with SUN_THROUGH_FOG, the transmittance from the visible point toward the sun (1 for the
-// sky and without it).
+// sky and without it), and, with SHAFTS, the lit share of the view ray (light shafts).
 #include "fog/transmittance.glsl"
 #include "common/camera.glsl"
 #include "passes/fog_texel.glsl"
+#include "common/dither.glsl"
 in vec2 vUV;
 uniform sampler2D uInvDist;       // full-resolution 1/distance (1/m), 0 = sky
 uniform vec3 uFwd, uRight, uUp;   // camera basis, right/up scaled by tan(fov/2)
 uniform float uSkyDistance;       // m
 uniform vec3 uSunDir;             // unit, toward the sun
-layout(location = 0) out vec3 fOut;  // (raw T, 1/distance used, T toward the sun)
+layout(location = 0) out vec4 fOut;  // (raw T, 1/distance used, T toward the sun, lit share)
+
+#ifdef SHAFTS
+uniform sampler2DShadow uShadow;  // the sun's depth map (compare: 1 = lit)
+uniform mat4 uSunViewProj;        // world -> the sun's clip space
+uniform vec3 uEye;                // m, world (the shadow map is in world space)
+uniform float uShaftLength;       // m: the view ray is sampled this far at most
+
+// Light shafts, SAMPLED (not a closed form): the share of SHAFTS samples along the view
+// ray's first uShaftLength metres that the sun lights, each sample's place jittered by the
+// pixel's interleaved gradient noise (deterministic, so a URL renders the same shafts).
+// Every sample counts the same, whatever the fog before it: an approximation of the
+// in-scattering integral, labelled so in the schema and docs/departures.md.
+float litShare(vec3 w, float d, vec2 px) {
+    float len = min(d, uShaftLength);
+    float j = interleavedGradientNoise(px);
+    float lit = 0.0;
+    for (int i = 0; i < SHAFTS; ++i) {
+        vec4 c = uSunViewProj * vec4(uEye + w * (len * (float(i) + j) / float(SHAFTS)), 1.0);
+        vec3 q = c.xyz / c.w * 0.5 + 0.5;
+        // outside the map nothing casts a shadow; 0.0015 of depth keeps a sample on a lit
+        // surface from shadowing itself (as the scene pass's bias)
+        bool inside = all(greaterThanEqual(q, vec3(0.0))) && all(lessThanEqual(q, vec3(1.0)));
+        lit += inside ? texture(uShadow, vec3(q.xy, q.z - 0.0015)) : 1.0;
+    }
+    return lit / float(SHAFTS);
+}
+#endif
+
 void main() {
     FogTexel ft = fogTexel(gl_FragCoord.xy, uInvDist, uFwd, uRight, uUp);
     float d = ft.invd > 0.0 ? 1.0 / ft.invd : uSkyDistance;
@@ -21,5 +50,9 @@ void main() {
 #ifdef SUN_THROUGH_FOG
     if (ft.invd > 0.0) sunT = fogSunTransmittance(ft.w * d, uSunDir, uSkyDistance);
 #endif
-    fOut = vec3(fogRawTransmittance(vec3(0.0), ft.w, d), ft.invd, sunT);
+    float lit = 1.0;
+#ifdef SHAFTS
+    lit = litShare(ft.w, d, floor(gl_FragCoord.xy));
+#endif
+    fOut = vec4(fogRawTransmittance(vec3(0.0), ft.w, d), ft.invd, sunT, lit);
 }
