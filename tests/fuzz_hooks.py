@@ -21,6 +21,10 @@ def _poly_ok(layer: dict) -> bool:
     u = np.linspace(-C, C, 20001)
     v = np.polynomial.polynomial.polyval(u, c)
     scale = max(1.0, float(np.abs(c).max()) * max(1.0, C) ** (len(c) - 1))
+    if layer.get("mode", "mirror") == "repeat":   # the border values match, by Horner at +-C
+        left, right = (float(np.polyval(c[::-1], x)) for x in (-C, C))
+        if abs(left - right) > 1e-9 * float(np.sum(np.abs(c) * C ** np.arange(len(c)))) * 0.99:
+            return False
     return bool(v.min() >= -1e-6 * scale)
 
 

@@ -33,10 +33,10 @@ def reduced_phase(k, x, scale, phase) -> float:
 
 
 def slid(layer, fog, O, time):
-    """The ray origin in the layer's own frame: rho(x - wind t) for a wind-sensitive layer."""
-    if not layer.wind:
-        return np.asarray(O, dtype=np.float64)
-    return np.asarray(O, dtype=np.float64) - fog.wind.vector() * time
+    """The ray origin in the layer's own frame: rho(x - v t), v the wind for a
+    wind-sensitive layer plus the layer's own drift (the noise kinds)."""
+    v = (fog.wind.vector() if layer.wind else np.zeros(3)) + np.asarray(getattr(layer, "drift", (0.0,) * 3))
+    return np.asarray(O, dtype=np.float64) - v * time
 
 
 def _quad(f, a, b, points=()):

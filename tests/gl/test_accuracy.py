@@ -309,3 +309,26 @@ def test_float64_references_over_the_schema(kind):
                 want = compose(fog, D[i], parts[i])
                 assert abs(got[i] - want) <= 1e-6 + noise_bound(fog, tex, W[i], D[i]), (
                     i, got[i], want, O[i].tolist(), W[i].tolist(), D[i], fog.model_dump(mode="json"))
+
+
+@pytest.mark.parametrize("kind", ["noise", "distance"])
+def test_noise_drifts_apart_from_the_wind(client, kind):
+    """Gawron 3.3: the noise's coordinates shift in time by a user value, apart from the
+    wind. With no wind and a drift v, T at time t along a ray equals T at time 0 along the
+    ray moved by -v t (the fog moved by v t), and differs from T at time 0 along the same
+    ray (the drift moves the fog)."""
+    layer = {"noise": {"kind": "noise", "density": 0.03, "scale": 40.0},
+             "distance": {"kind": "distance", "distance": 200.0, "noise_scale": 30.0, "low": 0.2,
+                          "high": 2.0}}[kind]
+    v = np.array([1.5, 0.0, -0.5])
+    fog = FogParams(layers=[{**layer, "wind": False, "drift": v.tolist()}], scene="calibration",
+                    wind={"speed": 0.0}, time=40.0)
+    rng = np.random.default_rng(5)
+    O = rng.normal(size=(16, 3)) * 20
+    W = np.array([unit(x) for x in rng.normal(size=(16, 3))])
+    D = rng.uniform(20, 150, 16)
+    now = glsl(client, fog, O, W, D)
+    moved = glsl(client, fog, O - v * 40.0, W, D, t=0.0)
+    still = glsl(client, fog, O, W, D, t=0.0)
+    assert float(np.abs(now - moved).max()) <= 2e-4
+    assert float(np.abs(now - still).max()) > 0.02

@@ -9,7 +9,7 @@ import numpy as np
 from fogbank.kinds import noise_bake as bake
 from fogbank.kinds.kind import Kind, Layout, direct
 from fogbank.kinds.rays import slide
-from fogbank.model.fields import LayerBase, num
+from fogbank.model.fields import Drift, LayerBase, drift_field, num
 
 
 class Distance(LayerBase):
@@ -22,6 +22,7 @@ class Distance(LayerBase):
     high: float = num(1.3, 0, 10, 0.01, "", "density where noise = 1")
     max: float = num(0.6, 0, 1, 0.01, "", "largest fog amount F")
     noise_scale: float = num(80.0, 0.1, 10000, 0.5, "m", "size of one noise tile", gt=True)
+    drift: Drift = drift_field()
 
 
 def transmittance(layer, O, omega, d, t, env):
@@ -41,7 +42,8 @@ def log_transmittance(layer, O, omega, d, t, env):
 def sample(rng):
     return Distance(start=rng.uniform(0, 30), distance=rng.uniform(20, 400), exponent=rng.uniform(0.2, 3),
                     low=rng.uniform(0, 1), high=rng.uniform(0, 2), max=rng.uniform(0, 1),
-                    noise_scale=rng.uniform(5, 100), wind=bool(rng.random() < 0.5))
+                    noise_scale=rng.uniform(5, 100), wind=bool(rng.random() < 0.5),
+                    drift=tuple(rng.uniform(-3, 3, 3)) if rng.random() < 0.5 else (0.0, 0.0, 0.0))
 
 
 KIND = Kind(

@@ -151,8 +151,10 @@ class Packing:
     index: int = -1        # the layer's index in fog.layers (its particle state's key)
 
     def wind(self, layer) -> np.ndarray:
-        """The velocity the layer's density slides with (0 for a layer without wind)."""
-        return self.fog.wind.vector() if layer.wind else np.zeros(3)
+        """The velocity the layer's density slides with: the wind for a wind-sensitive
+        layer, plus the layer's own drift (kinds/rays.velocity)."""
+        from fogbank.kinds.rays import velocity
+        return velocity(layer, self.fog.wind.vector())
 
     def slid(self, layer) -> np.ndarray:
         """E in the layer's own (unslid) frame: rho(x - wind t) is rho at x - wind t."""

@@ -10,7 +10,7 @@ from pydantic import Field
 from fogbank.kinds import noise_bake as bake
 from fogbank.kinds.kind import Kind, Layout
 from fogbank.kinds.rays import slide
-from fogbank.model.fields import Bool, Int, LayerBase, num
+from fogbank.model.fields import Bool, Drift, Int, LayerBase, drift_field, num
 
 
 class Noise(LayerBase):
@@ -23,6 +23,7 @@ class Noise(LayerBase):
     falloff_scale: float = num(10.0, 0.01, 1000, 0.1, "m", "dY is measured in these units", gt=True)
     samples: Int = Field(16, ge=1, le=128, description="volume mode: most samples per ray; each ray "
                                                        "takes what its error bound needs, up to this")
+    drift: Drift = drift_field()
 
 
 def density(layer, x, t, env):
@@ -85,7 +86,8 @@ def sample(rng):
     return Noise(mode=str(rng.choice(["surface", "volume"])), density=rng.uniform(0, 0.05),
                  scale=rng.uniform(5, 100), height_falloff=bool(rng.random() < 0.5),
                  falloff_scale=rng.uniform(2, 30), samples=int(rng.integers(1, 24)),
-                 wind=bool(rng.random() < 0.5))
+                 wind=bool(rng.random() < 0.5),
+                 drift=tuple(rng.uniform(-3, 3, 3)) if rng.random() < 0.5 else (0.0, 0.0, 0.0))
 
 
 NOISE_SAMPLE_S_PER_MPX = 0.022   # volume mode, per sample along the ray

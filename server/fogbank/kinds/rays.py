@@ -14,8 +14,16 @@ def as_rays(O, omega, d, t=0.0):
     return np.broadcast_to(O, (n, 3)), np.broadcast_to(omega, (n, 3)), d, t
 
 
+def velocity(layer, wind) -> np.ndarray:
+    """The velocity a layer's density slides with: the wind for a wind-sensitive layer,
+    plus the layer's own drift (the noise kinds)."""
+    v = np.asarray(wind, dtype=np.float64) if layer.wind else np.zeros(3)
+    return v + np.asarray(getattr(layer, "drift", (0.0, 0.0, 0.0)), dtype=np.float64)
+
+
 def slide(layer, x, t, wind):
-    """DESIGN: a wind-sensitive density rho(x) becomes rho(x - w t)."""
-    if not layer.wind:
+    """DESIGN: a density rho(x) moving at velocity v becomes rho(x - v t)."""
+    v = velocity(layer, wind)
+    if not v.any():
         return x
-    return x - np.asarray(wind, dtype=np.float64)[None, :] * np.asarray(t)[:, None]
+    return x - v[None, :] * np.asarray(t)[:, None]

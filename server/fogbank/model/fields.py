@@ -58,6 +58,15 @@ POSITION_LIMIT = 10_000.0
 RAY_LIMIT = 100_000.0
 Coord = Annotated[float, Field(strict=True, ge=-POSITION_LIMIT, le=POSITION_LIMIT)]
 Position = tuple[Coord, Coord, Coord]
+# a layer's own drift, m/s per axis (the noise kinds: Gawron 3.3 shifts the noise's
+# coordinates in time by a user value, apart from the wind)
+DriftSpeed = Annotated[float, Field(strict=True, ge=-20.0, le=20.0)]
+Drift = tuple[DriftSpeed, DriftSpeed, DriftSpeed]
+
+
+def drift_field():
+    return Field((0.0, 0.0, 0.0), description="the noise's own motion, m/s, added to the wind's "
+                                              "(Gawron 3.3: the noise coordinates shift in time)")
 # a direction or a wave vector: any non-degenerate finite vector, bounded so that its
 # float32 square (for normalising) stays finite
 Comp = Annotated[float, Field(strict=True, ge=-1e6, le=1e6)]

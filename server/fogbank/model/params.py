@@ -17,7 +17,7 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from fogbank.kinds import KINDS
-from fogbank.model.fields import MAX_LAYERS, MAX_PARTICLES, POSITION_LIMIT, Color, Int, Position, Strict, num
+from fogbank.model.fields import MAX_LAYERS, MAX_PARTICLES, POSITION_LIMIT, Bool, Color, Int, Position, Strict, num
 
 
 MAX_PIXELS = 16_000_000
@@ -96,7 +96,7 @@ class Effects(Strict):
     shafts: float = num(0.0, 0, 1, 0.05, "", "light shafts, SAMPLED (not exact): the in-scattered "
                         "sunlight is scaled toward the share of 32 jittered points along the view "
                         "ray that the shadow map lights (0 = off, 1 = fully)")
-    sun_through_fog: bool = Field(
+    sun_through_fog: Bool = Field(
         False, description="dim the sunlight on each surface by the fog between it and the sun: "
                            "the density layers' closed forms along the sun's direction for "
                            "sky_distance metres (shadows soften under dense fog)")

@@ -162,13 +162,15 @@ def _presets() -> dict[str, dict[str, Any]]:
             "title": "Gawron & Boryczka 2018: distance fog",
             "description": "Distance fog with noise-varied density, an orange scatter colour of "
                            "its own in the sun's direction (eqs. 5-8, with the scatter start "
-                           "distance) and a Gaussian blur that grows with the fog.",
+                           "distance), its noise drifting on its own (not with the wind) and a "
+                           "Gaussian blur that grows with the fog.",
             "params": {"camera": view, "fog_color": "#a9bcd9",
                        "sun": {"azimuth": 30.0, "elevation": 9.0, "color": "#fff1d6", "intensity": 3.0},
                        "effects": {"scatter": 0.25, "scatter_exponent": 4.0, "scatter_color": "#ffa647",
                                    "scatter_start": 20.0, "blur": "single", "blur_radius": 3.0},
                        "layers": [{"kind": "distance", "start": 10.0, "distance": 260.0, "exponent": 0.55,
-                                   "low": 0.8, "high": 1.2, "max": 0.75, "noise_scale": 90.0, "wind": True}]},
+                                   "low": 0.8, "high": 1.2, "max": 0.75, "noise_scale": 90.0, "wind": False,
+                                   "drift": (2.0, 0.0, -1.0)}]},
         },
     }
 

@@ -133,6 +133,11 @@ def _over_budget(c: cost.Cost, settings: Settings, what: str) -> RequestValidati
     return None
 
 
+# a POST body over the server's limit is refused before it is parsed (service/limits.py)
+TOO_LARGE = {"description": "the body is larger than this server accepts (FOGBANK_MAX_BODY_BYTES); "
+                            "the error names the limit"}
+
+
 def create_app(settings: Settings | None = None) -> FastAPI:
     settings = settings or get_settings()
     state: dict[str, Any] = {}
@@ -264,6 +269,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 
     @app.post("/api/still", summary="Render a still from JSON params",
               responses={200: {"content": {m: {} for m in MEDIA_TYPES.values()}},
+                         413: TOO_LARGE,
                          422: {"description": "a param is invalid, or the look costs more than this "
                                               "server renders; the body names what to change"},
                          503: {"description": "busy or slow renderer; see Retry-After"}},
@@ -279,7 +285,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         return await _still(resolve(body), format, request, "body")
 
     @app.post("/api/transmittance", response_model=TransmittanceResponse,
-              responses={422: {"description": "bad rays or params, or more particle simulation than "
+              responses={413: TOO_LARGE,
+                         422: {"description": "bad rays or params, or more particle simulation than "
                                               "this server does per request"},
                          503: {"description": "busy or slow renderer; see Retry-After"}},
               summary="Transmittance of rays through the fog, by the frame's own GLSL")

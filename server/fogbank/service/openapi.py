@@ -21,7 +21,9 @@ from fogbank.model.fields import MAX_PARTICLES
 RULES = (
     "Rules across fields (each refused with a 422 naming the field): a cosine layer's c0 is at "
     "least the sum of |amp| of its terms (Biri 3.2.1); a polynomial layer's P(u) is >= 0 on "
-    "[-half_width, half_width] (Biri 3.2.2); a particle layer's life_min <= life_max; at most "
+    "[-half_width, half_width] (Biri 3.2.2), and in mode 'repeat' P(-half_width) = "
+    "P(half_width) within 1e-9 of sum |coeffs[i]| half_width^i (a repeated tile's border "
+    "must match); a particle layer's life_min <= life_max; at most "
     f"{MAX_PARTICLES} particles over all layers; a line potential has a non-zero direction; "
     "width * height <= 16,000,000. A look may also be refused (422, type 'cost') when its "
     "estimated render time or memory is beyond this server's budget; the message names what "
