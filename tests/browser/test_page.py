@@ -182,7 +182,7 @@ def test_dragging_the_view_moves_the_camera(server, browser):
 def test_page_reconnects_after_the_server_restarts(browser):
     s = Server().start()
     try:
-        page = new_page(browser, s.url + "/?v=1&camera.yaw=30")
+        page = new_page(browser, s.url + "/?v=1&camera.yaw=45")   # not the default's yaw
         wait_frames(page, 3)
         s.stop()
         page.wait_for_selector("#banner:not([hidden])", timeout=20000)
@@ -191,7 +191,7 @@ def test_page_reconnects_after_the_server_restarts(browser):
         s.start()
         page.wait_for_selector("#banner[hidden]", state="attached", timeout=30000)
         wait_frames(page, before + 3)
-        assert "camera.yaw=30" in page.url   # the same look, from the URL
+        assert "camera.yaw=45" in page.url   # the same look, from the URL
         page.context.close()
     finally:
         s.stop()
