@@ -541,3 +541,37 @@ def test_light_shafts_are_the_lit_share_of_jittered_samples_along_the_view_ray(r
     assert int(shaded.sum()) > 200
     assert float(np.percentile(np.abs(diff.reshape(-1, 3) - lost)[shaded], 95)) <= 0.01
     assert float(np.percentile(np.abs(diff.reshape(-1, 3) - lost), 99)) <= 0.01
+
+
+def test_single_pass_blur_has_no_ghosts(renderer):
+    """The fused blur's 5x5 Gaussian taps were sigma apart on the full-resolution image, so
+    at a large sigma a sharp edge became a staircase of five copies (the house showed
+    ghosts at blur_radius 10). Across the bottom edge of the red box, where it meets the
+    ground at the same depth (so the depth-aware weights let the blur cross it; sigma
+    ~4.6 px at 640x360), the vertical gradient averaged over 12 columns is one ramp:
+    within 3 sigma of the edge, the rows where it exceeds 20% of its peak form one run
+    (a staircase of ghosts has flat steps between its copies: five runs before)."""
+    density = 0.03
+    still = calibration_still(layers=[{"kind": "homogeneous", "density": density}], width=640, height=360)
+    still = still.model_copy(update={"effects": still.effects.model_copy(update={
+        "blur": "single", "blur_radius": 16.0})})
+    img = renderer.render(still).astype(np.float64)[..., 1]   # green: the red box is dark in it
+    py, px = np.mgrid[0:360, 0:640]
+    w = hand_rays(still.camera, px.ravel(), (359 - py).ravel(), 640, 360)
+    d, obj = _cast(np.asarray(still.camera.position, dtype=np.float64), w)
+    red = obj.reshape(360, 640) == 1
+    cols = np.nonzero(red.sum(axis=0) > 10)[0]
+    cols = cols[len(cols) // 2 - 6:len(cols) // 2 + 6]
+    assert len(cols) == 12
+    bottom = int(np.nonzero(red[:, cols[0]])[0].max())       # rows top first
+    profile = img[:, cols].mean(axis=1)
+    grad = np.abs(np.diff(profile))
+    dist = float(np.median(d.reshape(360, 640)[bottom, cols]))
+    sigma = 16.0 * 360 / 720 * (1 - np.exp(-density * dist))
+    assert sigma > 3.0
+    lo, hi = int(bottom - 3 * sigma), int(bottom + 3 * sigma)
+    g = grad[lo:hi]
+    assert float(g.max()) > 2.0                              # a real edge, blurred
+    steep = g > 0.2 * g.max()
+    runs = int(steep[0]) + int(np.count_nonzero(steep[1:] & ~steep[:-1]))
+    assert runs == 1

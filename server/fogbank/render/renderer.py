@@ -50,7 +50,7 @@ class Renderer:
         preparation thread."""
         w, h = still.width, still.height
         view = cam.view(still.camera, w, h)
-        g = self.caches.gbuffer(slot, w, h)
+        g = self.caches.gbuffer(slot, w, h, still.effects.sun_through_fog)
         key = (still.scene, still.camera, still.sun, msaa)
         # a preview happily reuses a full-quality scene pass
         cached = g.scene_key == key or (not msaa and g.scene_key == key[:3] + (True,))
@@ -66,7 +66,8 @@ class Renderer:
         frame = self.begin(still, slot, msaa)
         for p in FRAME_PASSES:
             p.run(self, frame)
-        self.caches.trim(keep_targets=[frame.targets.size], keep_gbuffers=[(slot, *frame.targets.size)])
+        self.caches.trim(keep_targets=[frame.targets.size],
+                         keep_gbuffers=[(slot, *frame.targets.size, frame.gbuffer.sunlight is not None)])
         return frame.image
 
     def transmittance(self, fog, origins, directions, lengths, times) -> np.ndarray:

@@ -13,9 +13,10 @@ from fogbank.render.gl import release_fbo
 MSAA_SAMPLES = 4
 # bytes per pixel of each GPU allocation (for the caches' byte budgets and the cost model)
 OUT_BPP = 4                                   # RGBA8 output renderbuffer
-MSAA_BPP = MSAA_SAMPLES * (8 + 4 + 8 + 4)     # RGBA16F + R32F + RGBA16F + depth24/stencil8, per sample
+MSAA_BPP = MSAA_SAMPLES * (8 + 4 + 4)         # RGBA16F + R32F + depth24/stencil8, per sample
 LINEAR_BPP = 2 * 8                            # two RGBA16F blur targets
-GBUFFER_BPP = 8 + 4 + 8 + 4                   # RGBA16F colour, R32F 1/distance, RGBA16F sunlight, depth
+GBUFFER_BPP = 8 + 4 + 4                       # RGBA16F colour, R32F inverse distance, depth
+SUNLIGHT_BPP = 8                              # RGBA16F direct sunlight (sun_through_fog only), per sample
 FOG_BPP = 16                                  # RGBA32F (raw T, 1/distance, T toward the sun, lit share)
 
 
@@ -26,38 +27,42 @@ class Targets:
     ctx: moderngl.Context
     size: tuple[int, int]
     out: moderngl.Framebuffer
-    msaa_fbo: moderngl.Framebuffer | None = None
+    msaa_fbos: dict[bool, moderngl.Framebuffer] = field(default_factory=dict)   # by sunlight
     fog: dict[int, tuple[moderngl.Framebuffer, moderngl.Texture]] = field(default_factory=dict)
     linear: list[tuple[moderngl.Framebuffer, moderngl.Texture]] = field(default_factory=list)
 
     def nbytes(self) -> int:
         w, h = self.size
         n = w * h * OUT_BPP
-        if self.msaa_fbo is not None:
-            n += w * h * MSAA_BPP
+        for sun in self.msaa_fbos:
+            n += w * h * (MSAA_BPP + (MSAA_SAMPLES * SUNLIGHT_BPP if sun else 0))
         for scale in self.fog:
             n += -(-w // scale) * -(-h // scale) * FOG_BPP
         n += len(self.linear) * w * h * 8
         return n
 
     def release(self) -> None:
-        for fbo in [self.out, self.msaa_fbo] + [f for f, _ in self.fog.values()] + [f for f, _ in self.linear]:
+        for fbo in [self.out, *self.msaa_fbos.values()] + [f for f, _ in self.fog.values()] + \
+                [f for f, _ in self.linear]:
             release_fbo(fbo)
         self.fog.clear()
         self.linear.clear()
-        self.msaa_fbo = None
+        self.msaa_fbos.clear()
 
-    def msaa(self) -> moderngl.Framebuffer:
-        """Colour (RGBA16F), inverse distance (R32F), direct sunlight (RGBA16F) and depth,
-        MSAA_SAMPLES per pixel."""
-        if self.msaa_fbo is None:
+    def msaa(self, sunlight: bool = False) -> moderngl.Framebuffer:
+        """Colour (RGBA16F), inverse distance (R32F), with `sunlight` the direct sunlight
+        (RGBA16F), and depth, MSAA_SAMPLES per pixel. The sunlight attachment costs every
+        frame (about 50 ms of 300 at 1280x720 on llvmpipe), so only looks that dim the
+        sunlight by the fog have it."""
+        if sunlight not in self.msaa_fbos:
             ctx, size = self.ctx, self.size
-            self.msaa_fbo = ctx.framebuffer(
-                color_attachments=[ctx.renderbuffer(size, 4, samples=MSAA_SAMPLES, dtype="f2"),
-                                   ctx.renderbuffer(size, 1, samples=MSAA_SAMPLES, dtype="f4"),
-                                   ctx.renderbuffer(size, 4, samples=MSAA_SAMPLES, dtype="f2")],
-                depth_attachment=ctx.depth_renderbuffer(size, samples=MSAA_SAMPLES))
-        return self.msaa_fbo
+            colors = [ctx.renderbuffer(size, 4, samples=MSAA_SAMPLES, dtype="f2"),
+                      ctx.renderbuffer(size, 1, samples=MSAA_SAMPLES, dtype="f4")]
+            if sunlight:
+                colors.append(ctx.renderbuffer(size, 4, samples=MSAA_SAMPLES, dtype="f2"))
+            self.msaa_fbos[sunlight] = ctx.framebuffer(
+                color_attachments=colors, depth_attachment=ctx.depth_renderbuffer(size, samples=MSAA_SAMPLES))
+        return self.msaa_fbos[sunlight]
 
     def fog_target(self, scale: int):
         """(framebuffer, texture) of (raw T, 1/distance, T toward the sun, lit share of the
@@ -80,17 +85,26 @@ class Targets:
 
 @dataclass
 class GBuffer:
-    """A cached scene pass (colour, inverse distance, direct sunlight) for one slot (a
-    streaming session, or stills) and size; redrawn only when scene, camera, sun or MSAA
-    change."""
-    fbo: moderngl.Framebuffer      # colour + inverse distance + sunlight + single-sample depth
+    """A cached scene pass (colour, inverse distance and, for looks with sun_through_fog,
+    the direct sunlight) for one slot (a streaming session, or stills) and size; redrawn
+    only when scene, camera, sun or MSAA change."""
+    fbo: moderngl.Framebuffer      # colour + inverse distance (+ sunlight) + single-sample depth
     color: moderngl.Texture
     invdist: moderngl.Texture
-    sunlight: moderngl.Texture
+    sunlight: moderngl.Texture | None
     scene_key: object = None
+    mips_key: object = None        # the scene pass whose mip pyramid the textures hold
+
+    def mipmaps(self) -> None:
+        """Build the colour's (and sunlight's) mip pyramid once per scene pass drawn."""
+        if self.mips_key != self.scene_key:
+            for tex in (self.color, self.sunlight):
+                if tex is not None:
+                    tex.build_mipmaps()
+            self.mips_key = self.scene_key
 
     def nbytes(self) -> int:
-        return self.color.width * self.color.height * GBUFFER_BPP
+        return self.color.width * self.color.height * (GBUFFER_BPP + (SUNLIGHT_BPP if self.sunlight else 0))
 
     def release(self) -> None:
         release_fbo(self.fbo)   # colour, inverse distance and the depth renderbuffer
@@ -104,7 +118,7 @@ class TargetCache:
     def __init__(self, ctx: moderngl.Context, budget: int):
         self.ctx = ctx
         self._targets = ByteLRU(budget // 2)    # (w, h) -> Targets
-        self._gbuffers = ByteLRU(budget // 2)   # (slot, w, h) -> GBuffer
+        self._gbuffers = ByteLRU(budget // 2)   # (slot, w, h, sunlight) -> GBuffer
         self.park_fbo = ctx.framebuffer(color_attachments=[ctx.renderbuffer((1, 1), 4)])
 
     def park(self) -> None:
@@ -114,19 +128,21 @@ class TargetCache:
         return self._targets.get((w, h), lambda: Targets(
             self.ctx, (w, h), self.ctx.framebuffer(color_attachments=[self.ctx.renderbuffer((w, h), 4)])))
 
-    def gbuffer(self, slot: str, w: int, h: int) -> GBuffer:
+    def gbuffer(self, slot: str, w: int, h: int, sunlight: bool = False) -> GBuffer:
         def make() -> GBuffer:
             ctx = self.ctx
             color = ctx.texture((w, h), 4, dtype="f2")
             color.repeat_x = color.repeat_y = False
             invdist = ctx.texture((w, h), 1, dtype="f4")
             invdist.filter = (moderngl.NEAREST, moderngl.NEAREST)
-            sunlight = ctx.texture((w, h), 4, dtype="f2")
-            sunlight.repeat_x = sunlight.repeat_y = False
-            fbo = ctx.framebuffer(color_attachments=[color, invdist, sunlight],
+            sun = None
+            if sunlight:
+                sun = ctx.texture((w, h), 4, dtype="f2")
+                sun.repeat_x = sun.repeat_y = False
+            fbo = ctx.framebuffer(color_attachments=[color, invdist] + ([sun] if sun else []),
                                   depth_attachment=ctx.depth_renderbuffer((w, h)))
-            return GBuffer(fbo, color, invdist, sunlight)
-        return self._gbuffers.get((slot, w, h), make)
+            return GBuffer(fbo, color, invdist, sun)
+        return self._gbuffers.get((slot, w, h, sunlight), make)
 
     def trim(self, keep_targets=(), keep_gbuffers=()) -> None:
         self.park()

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from fogbank.kinds import KINDS
 from fogbank.kinds.packing import enabled, uses_noise, variant
 from fogbank.model.params import FogParams, StillParams
-from fogbank.render.targets import FOG_BPP, GBUFFER_BPP, LINEAR_BPP, MSAA_BPP, OUT_BPP
+from fogbank.render.targets import FOG_BPP, GBUFFER_BPP, LINEAR_BPP, MSAA_BPP, MSAA_SAMPLES, OUT_BPP, SUNLIGHT_BPP
 
 # seconds on the reference machine
 SCENE_FIXED_S = 0.10          # shadow map check, terrain vertex work, programs
@@ -93,6 +93,8 @@ def estimate(still: StillParams, msaa: bool = True, fmt: str = "jpg", scale: flo
     memory = px * (OUT_BPP + GBUFFER_BPP + 3 + 4) + int(fog_mpx * 1e6) * FOG_BPP
     if msaa:
         memory += px * MSAA_BPP
+    if e.sun_through_fog:   # the direct sunlight attachment, in the G-buffer and the MSAA target
+        memory += px * SUNLIGHT_BPP * (1 + (MSAA_SAMPLES if msaa else 0))
     if e.blur == "separate":
         memory += px * LINEAR_BPP
     seconds = sum(parts.values()) * scale

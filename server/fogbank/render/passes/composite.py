@@ -29,8 +29,9 @@ class CompositePass(Pass):
     def run(self, r, f) -> None:
         look, e, v = f.still, f.still.effects, f.view
         mode = BLUR_MODES[e.blur]
+        sun = f.gbuffer.sunlight is not None
         prog = r.programs.get("passes/fullscreen.vert", "passes/composite.frag",
-                              FOG_SCALE=e.fog_scale, BLUR_MODE=mode)
+                              FOG_SCALE=e.fog_scale, BLUR_MODE=mode, SUN_LIGHT=int(sun))
         set_uniforms(prog, {
             "uFwd": v.fwd, "uRight": v.right, "uUp": v.up,
             "uFogColor": np.array(srgb_to_linear(look.fog_color)),
@@ -41,9 +42,12 @@ class CompositePass(Pass):
             "uPhaseHG": e.phase == "henyey-greenstein", "uAnisotropy": e.anisotropy,
             "uShafts": e.shafts,
             "uMaxOpacity": e.max_opacity, "uBlurExponent": e.blur_exponent})
+        if mode == BLUR_MODES["single"]:
+            f.gbuffer.mipmaps()   # the fused blur reads the scene's mip pyramid
         f.gbuffer.color.use(TEX["uColor"])
         f.gbuffer.invdist.use(TEX["uInvDist"])
-        f.gbuffer.sunlight.use(TEX["uSunLight"])
+        if sun:
+            f.gbuffer.sunlight.use(TEX["uSunLight"])
         f.fog_tex.use(TEX["uFog"])
         if mode == BLUR_MODES["separate"]:
             f.targets.linear_pair()[0][0].use()

@@ -15,7 +15,7 @@ from fogbank.scene.meshes import CALIBRATION_SKY
 def scene_target(f):
     """Where the sky and the scene are drawn: the MSAA target, resolved into the
     G-buffer by the scene pass, or the G-buffer itself for a preview."""
-    return f.targets.msaa() if f.msaa else f.gbuffer.fbo
+    return f.targets.msaa(f.gbuffer.sunlight is not None) if f.msaa else f.gbuffer.fbo
 
 
 def sun_color(look) -> np.ndarray:

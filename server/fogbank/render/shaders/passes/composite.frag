@@ -1,15 +1,17 @@
 // Composite (Biri eq. 5): C = T C_scene + (1 - T) C_fog, with C_fog tinted by sun
 // in-scattering (Gawron 3.2) and, optionally, the fog blur fused in (Gawron 3.4, single
-// pass: the scene under the fog is blurred with a Gaussian whose sigma follows 1 - T).
+// pass: the scene under the fog is blurred with a Gaussian whose sigma follows 1 - T,
+// 5x5 taps on the scene colour's mip pyramid, so that no tap gap shows as a ghost).
 // T comes from the fog target, upsampled with depth awareness when it is smaller.
-// Defined by the renderer: FOG_SCALE (1, 2, 4) and BLUR_MODE (0 off, 1 fused here,
-// 2 separate passes follow).
+// Defined by the renderer: FOG_SCALE (1, 2, 4), BLUR_MODE (0 off, 1 fused here,
+// 2 separate passes follow) and SUN_LIGHT (1: the G-buffer has the direct sunlight, to be
+// dimmed by the fog toward the sun).
 #include "common/camera.glsl"
 #include "common/srgb.glsl"
 #include "common/phase.glsl"
 #include "fog/finish.glsl"
 in vec2 vUV;
-uniform sampler2D uColor;         // scene colour, linear (bilinear filtering)
+uniform sampler2D uColor;         // scene colour, linear (trilinear, mipmapped when blurring)
 uniform sampler2D uInvDist;       // full-resolution 1/distance
 uniform sampler2D uFog;           // (raw T, 1/distance, T toward the sun, lit share) at 1/FOG_SCALE size
 uniform float uShafts;            // how much the view ray's shadowed share takes from the in-scattering
@@ -29,6 +31,38 @@ layout(location = 0) out vec4 fColor;
 
 // Gawron Table 1: the 5x5 Gaussian kernel with sigma = 1 (weights sum to ~1).
 const float K5[5] = float[5](0.054488685, 0.244201342, 0.402619947, 0.244201342, 0.054488685);
+
+// The fused blur of the scene at px with Gaussian sigma (px). Gawron's 5x5 kernel with its
+// taps s apart covers a Gaussian of sigma s, but on the full-resolution image the gaps
+// between taps show as five ghost copies of a sharp edge once s is a few pixels. Each tap
+// reads the mip level whose texels are s wide (trilinear): a box-and-tent prefilter of
+// sigma ~s/2 that closes the gaps. The two combine to sigma^2 = s^2 (1 + 1/4), so
+// s = sigma / sqrt(1.25). Taps on a surface far (> ~5%) from the centre's in depth count
+// less, so a near object does not bleed into the fog behind it, nor the reverse.
+vec3 blurredScene(ivec2 px, float sigma, float invd, float sunLoss, vec2 full) {
+    float s = sigma * 0.894427191;
+    float lod = max(log2(s), 0.0);
+    vec3 acc = vec3(0.0);
+    float wsum = 0.0;
+    ivec2 size = ivec2(full);
+    for (int y = 0; y < 5; ++y) {
+        for (int x = 0; x < 5; ++x) {
+            vec2 off = vec2(x - 2, y - 2) * s;
+            vec2 uv = (vec2(px) + 0.5 + off) / full;
+            float tinvd = texelFetch(uInvDist, clamp(px + ivec2(round(off)), ivec2(0), size - 1), 0).r;
+            // relative depth difference; 1e-6 1/m keeps sky-vs-sky at 0 (as fogT)
+            float rel = abs(tinvd - invd) / max(max(tinvd, invd), 1e-6);
+            float w = K5[x] * K5[y] * exp(-rel * rel * 400.0);
+            vec3 tap = textureLod(uColor, uv, lod).rgb;
+#if SUN_LIGHT
+            tap -= sunLoss * textureLod(uSunLight, uv, lod).rgb;
+#endif
+            acc += w * tap;
+            wsum += w;
+        }
+    }
+    return acc / wsum;   // the centre tap alone weighs 0.16: wsum > 0
+}
 
 // Depth-aware upsample (Biri 4.3; "nearest-depth" joint bilateral): the four nearest fog
 // texels weighted bilinearly and by how close their surface is to this pixel's; the raw
@@ -77,18 +111,14 @@ void main() {
     float mu = dot(ws, uSunDir);
     float F = uPhaseHG ? phaseHG(mu, uAnisotropy) : pow(max(mu, 0.0), uScatterExponent);
     vec3 fog = uFogColor + uScatterColor * F * mix(1.0, Ts.z, uShafts);
-    vec3 scene = texelFetch(uColor, px, 0).rgb - sunLoss * texelFetch(uSunLight, px, 0).rgb;
+    vec3 scene = texelFetch(uColor, px, 0).rgb;
+#if SUN_LIGHT
+    scene -= sunLoss * texelFetch(uSunLight, px, 0).rgb;
+#endif
     if (BLUR_MODE == 1) {
         float sigma = uBlurSigma * pow(1.0 - T, uBlurExponent);
-        if (sigma > 0.05) {   // below 0.05 px the kernel is the identity to 8 bits
-            vec3 acc = vec3(0.0);
-            for (int y = 0; y < 5; ++y)
-                for (int x = 0; x < 5; ++x) {
-                    vec2 uv = (vec2(px) + 0.5 + vec2(x - 2, y - 2) * sigma) / full;
-                    acc += K5[x] * K5[y] * (texture(uColor, uv).rgb - sunLoss * texture(uSunLight, uv).rgb);
-                }
-            scene = acc;
-        }
+        if (sigma > 0.05)   // below 0.05 px the kernel is the identity to 8 bits
+            scene = blurredScene(px, sigma, invd, sunLoss, full);
     }
     vec3 c = T * scene + (1.0 - T) * fog;
     if (BLUR_MODE == 2) fColor = vec4(c, 1.0 - T);     // linear, fog amount for the blur
