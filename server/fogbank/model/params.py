@@ -94,7 +94,7 @@ class Effects(Strict):
     anisotropy: float = num(0.6, -0.95, 0.95, 0.01, "", "Henyey-Greenstein g: 0 scatters evenly, "
                             "> 0 forward (a glow round the sun), < 0 back toward it")
     shafts: float = num(0.0, 0, 1, 0.05, "", "light shafts, SAMPLED (not exact): the in-scattered "
-                        "sunlight is scaled toward the share of 32 jittered points along the view "
+                        "sunlight is scaled toward the share of 16 jittered points along the view "
                         "ray that the shadow map lights (0 = off, 1 = fully)")
     sun_through_fog: Bool = Field(
         False, description="dim the sunlight on each surface by the fog between it and the sun: "

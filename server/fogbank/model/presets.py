@@ -55,7 +55,7 @@ def _presets() -> dict[str, dict[str, Any]]:
                 "sun": {"azimuth": 30.0, "elevation": 9.0, "color": "#ffd9a8", "intensity": 3.4},
                 "effects": {"phase": "henyey-greenstein", "anisotropy": 0.6, "scatter": 0.04,
                             "shafts": 1.0, "sun_through_fog": True, "sky_distance": 400.0,
-                            "fog_scale": 1},
+                            "fog_scale": 2},
                 "layers": [
                     {"kind": "height", "density": 0.025, "falloff": 0.2, "base": 1.0},
                     _biri_fig6_layer(0.0025, 24.0),

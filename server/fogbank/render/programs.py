@@ -15,7 +15,7 @@ FULLSCREEN = "passes/fullscreen.vert"
 MAX_VARIANTS = 48
 
 
-SHAFT_SAMPLES = 32   # shadow-map samples per view ray for light shafts
+SHAFT_SAMPLES = 16   # shadow-map samples per view ray for light shafts
 
 
 class Programs:

@@ -48,6 +48,10 @@ class ShadowMap:
         self.tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
         self.tex.repeat_x = self.tex.repeat_y = False
         self.fbo = ctx.framebuffer(depth_attachment=self.tex)
+        # the shafts' samples compare one texel each (their jitter smooths the edges):
+        # bilinear PCF costs four
+        self.nearest = ctx.sampler(texture=self.tex, filter=(moderngl.NEAREST, moderngl.NEAREST),
+                                   compare_func="<=", repeat_x=False, repeat_y=False)
         self.key: object = None
 
 

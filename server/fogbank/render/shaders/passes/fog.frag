@@ -31,9 +31,12 @@ float litShare(vec3 w, float d, vec2 px) {
     float len = min(d, uShaftLength);
     float j = interleavedGradientNoise(px);
     float lit = 0.0;
+    // the sun's projection is orthographic (affine), so the ray's points in its [0, 1]
+    // map space lie on the segment between the two ends' images
+    vec3 q0 = (uSunViewProj * vec4(uEye, 1.0)).xyz * 0.5 + 0.5;
+    vec3 q1 = (uSunViewProj * vec4(uEye + w * len, 1.0)).xyz * 0.5 + 0.5;
     for (int i = 0; i < SHAFTS; ++i) {
-        vec4 c = uSunViewProj * vec4(uEye + w * (len * (float(i) + j) / float(SHAFTS)), 1.0);
-        vec3 q = c.xyz / c.w * 0.5 + 0.5;
+        vec3 q = mix(q0, q1, (float(i) + j) / float(SHAFTS));
         // outside the map nothing casts a shadow; 0.0015 of depth keeps a sample on a lit
         // surface from shadowing itself (as the scene pass's bias)
         bool inside = all(greaterThanEqual(q, vec3(0.0))) && all(lessThanEqual(q, vec3(1.0)));
