@@ -101,6 +101,8 @@ class GBuffer:
             for tex in (self.color, self.sunlight):
                 if tex is not None:
                     tex.build_mipmaps()
+                    # bilinear within the nearest level: trilinear reads twice the texels
+                    tex.filter = (moderngl.LINEAR_MIPMAP_NEAREST, moderngl.LINEAR)
             self.mips_key = self.scene_key
 
     def nbytes(self) -> int:
