@@ -77,7 +77,11 @@ class NoiseTiles:
             # GL wants x fastest; the baked array is indexed [x, y, z]
             tex = self.ctx.texture3d((n, n, n), 1, np.ascontiguousarray(data.transpose(2, 1, 0)).tobytes(),
                                      dtype="f4")
-            tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+            # the mip pyramid filters distant noise in frames (common/noise_texture.glsl);
+            # texelFetch at level 0 keeps the exact trilinear nearer, and in the rays API
+            tex.build_mipmaps()
+            tex.filter = (moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR)
+            tex.repeat_x = tex.repeat_y = tex.repeat_z = True
             if len(self._tiles) >= NOISE_TILES:
                 self._tiles.pop(next(iter(self._tiles))).release()
             self._tiles[key] = tex

@@ -5,6 +5,8 @@ includes fog/transmittance.glsl (this pass, and the rays of the transmittance AP
 
 from __future__ import annotations
 
+import math
+
 import moderngl
 
 from fogbank.render.gl import TEX, set_uniforms
@@ -38,8 +40,11 @@ class FogPass(Pass):
         prog = r.programs.fog(plan.key, e.fog_scale, f.raymarch_steps, e.sun_through_fog, shafts)
         bind_fog(r, prog, plan)
         v = f.view
+        # the angle one fog texel subtends (vertically), for filtering distant noise
+        footprint = 2.0 * math.tan(math.radians(f.still.camera.fov) / 2.0) / f.still.height * e.fog_scale
         set_uniforms(prog, {"uFwd": v.fwd, "uRight": v.right, "uUp": v.up,
-                            "uSkyDistance": e.sky_distance, "uSunDir": f.still.sun.direction()})
+                            "uSkyDistance": e.sky_distance, "uSunDir": f.still.sun.direction(),
+                            "uNoiseFootprint": footprint})
         if shafts:
             _, (_, half), _ = r.meshes.get(f.still.scene)
             # the shadow map spans the scene's bounds (2 half); beyond, nothing is shadowed

@@ -5,11 +5,21 @@
 // x in m (relative to the reference point), invScale = tiles per metre, off = the
 // reference point's position in tiles (wind slide included), reduced to [0, 1) in float64
 // on the CPU. Texel centres at (i + 0.5) / N, as in GL.
+//
+// Filtered with distance in frames: a fog texel at distance |x| spans |x| uNoiseFootprint
+// metres (the angle one fog texel subtends, set by the fog pass; 0 in the transmittance
+// API, whose rays are not pixels). Where that is more than one noise texel, the tile's mip
+// pyramid (box-filtered, wrapping) gives the average the pixel covers, at the level whose
+// texels are that wide: distant noise no longer speckles. Nearer, the exact trilinear.
+uniform float uNoiseFootprint;            // rad per fog texel
+
 float noiseSample(sampler3D tex, vec3 x, float invScale, vec3 off) {
     int n = textureSize(tex, 0).x;
     float N = float(n);
     vec3 t = x * invScale;
     t -= floor(t);                            // whole tiles first: keeps the sum below small
+    float texels = length(x) * uNoiseFootprint * invScale * N;
+    if (texels > 1.0) return textureLod(tex, fract(t + off), log2(texels)).r;
     vec3 p = fract(t + off) * N - 0.5;
     p -= N * floor(p / N);                    // wrap into [0, N) before taking integers
     vec3 f = fract(p);
