@@ -40,7 +40,8 @@ def phase_at(k, E, wind, time, scale, phase) -> float:
 
 def coordinate_at(axis, E, wind, time, offset, period, C) -> float:
     """A polynomial's u = axis . (E - wind time) + offset at the reference point; with a
-    period (repeat mode), reduced to [-C, C) (exactly, when it is large)."""
+    period (2C repeated, 4C mirrored), reduced to [-C, period - C) (exactly, when it is
+    large)."""
     x, exact = _linear(axis, E, wind, time, 1.0, offset)
     if period is None:
         return x

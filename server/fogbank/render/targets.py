@@ -106,7 +106,10 @@ class GBuffer:
             self.mips_key = self.scene_key
 
     def nbytes(self) -> int:
-        return self.color.width * self.color.height * (GBUFFER_BPP + (SUNLIGHT_BPP if self.sunlight else 0))
+        n = self.color.width * self.color.height * (GBUFFER_BPP + (SUNLIGHT_BPP if self.sunlight else 0))
+        if self.mips_key is not None:   # the colour's (and sunlight's) mip pyramid: a third more
+            n += self.color.width * self.color.height * (8 + (SUNLIGHT_BPP if self.sunlight else 0)) // 3
+        return n
 
     def release(self) -> None:
         release_fbo(self.fbo)   # colour, inverse distance and the depth renderbuffer

@@ -21,6 +21,7 @@ from fogbank.model.fields import srgb_to_linear
 
 VERTEX_FLOATS = 10
 CHUNKS = 8   # terrain chunks per side
+TERRAIN_CELLS = 288   # vertices per side of the detailed grid
 
 
 @dataclass(frozen=True)
@@ -119,7 +120,7 @@ def blob(center, radius, color, squash=0.85) -> np.ndarray:
     return _tris(pos, nrm, color, 0.0)
 
 
-def _terrain_grid(n: int = 288):
+def _terrain_grid(n: int = TERRAIN_CELLS):
     xs = np.linspace(-terrain.EXTENT, terrain.EXTENT, n)
     X, Z = np.meshgrid(xs, xs, indexing="xy")
     Y = terrain.height(X, Z)
@@ -221,44 +222,41 @@ def _trees() -> list[np.ndarray]:
 
 
 # The land beyond the detailed terrain, out to the horizon: the same height field on a grid
-# whose cells grow by GROWTH per ring from SKIRT_INNER (under the detailed terrain's edge,
-# so no crack opens between them) to SKIRT_OUTER (within the camera's far plane).
-SKIRT_INNER = 200.0
+# whose lines inside [-EXTENT, EXTENT] are the detailed grid's own (so the two meshes share
+# every vertex along the seam: no crack, and no overlap for a coarse facet to poke
+# through) and whose rings beyond grow by SKIRT_GROWTH out to SKIRT_OUTER (within the
+# camera's far plane).
 SKIRT_OUTER = 3500.0
 SKIRT_GROWTH = 1.3
-SKIRT_SINK = 0.4   # m: under the detailed terrain where they overlap
 
 
 def skirt_coordinates() -> np.ndarray:
-    """The grid lines of the far skirt along x (and z): symmetric, growing outward, and
-    finer than the detailed grid's edge nowhere it shows."""
-    ring = [SKIRT_INNER]
+    """The skirt's grid lines along x (and z): the detailed grid's lines, then rings
+    growing outward from its edge."""
+    E = terrain.EXTENT
+    ring = [E]
     while ring[-1] < SKIRT_OUTER:
         ring.append(min(ring[-1] * SKIRT_GROWTH, SKIRT_OUTER))
-    inner = np.linspace(-SKIRT_INNER, SKIRT_INNER, 9)[1:-1]
-    return np.concatenate([-np.array(ring[::-1]), inner, np.array(ring)])
+    inner = np.linspace(-E, E, TERRAIN_CELLS)
+    return np.concatenate([-np.array(ring[:0:-1]), inner, np.array(ring[1:])])
 
 
 def _far_skirt() -> np.ndarray:
-    """The far land as terrain-material triangles: every cell of the skirt's grid that is
-    not wholly inside the detailed terrain, at the terrain's own height (sunk by
-    SKIRT_SINK, so that the detailed terrain wins where they overlap)."""
+    """The far land as terrain-material triangles: every cell of the skirt's grid outside
+    the detailed terrain, at the terrain's own height."""
+    E = terrain.EXTENT
     xs = skirt_coordinates()
     X, Z = np.meshgrid(xs, xs, indexing="xy")
-    Y = terrain.height(X, Z) - SKIRT_SINK
+    P = np.stack([X, terrain.height(X, Z), Z], axis=-1)
     N = terrain.normal(X, Z)
-    P = np.stack([X, Y, Z], axis=-1)
-    tris, nrms = [], []
     n = len(xs)
-    for j in range(n - 1):
-        for i in range(n - 1):
-            if max(abs(xs[i]), abs(xs[i + 1])) <= SKIRT_INNER and max(abs(xs[j]), abs(xs[j + 1])) <= SKIRT_INNER:
-                continue   # inside the detailed terrain
-            a, b, c, d = (j, i), (j, i + 1), (j + 1, i), (j + 1, i + 1)
-            for t in ((a, c, b), (b, c, d)):
-                tris.extend(P[k] for k in t)
-                nrms.extend(N[k] for k in t)
-    return _tris(np.array(tris), np.array(nrms), (1.0, 1.0, 1.0), 1.0)
+    j, i = np.mgrid[0:n - 1, 0:n - 1]
+    inside = (np.abs(xs[i]) <= E) & (np.abs(xs[i + 1]) <= E) & (np.abs(xs[j]) <= E) & (np.abs(xs[j + 1]) <= E)
+    j, i = j[~inside], i[~inside]
+    corners = [(j, i), (j + 1, i), (j, i + 1), (j, i + 1), (j + 1, i), (j + 1, i + 1)]   # a-c-b, b-c-d
+    tri = np.stack([P[jj, ii] for jj, ii in corners], axis=1).reshape(-1, 3)
+    nrm = np.stack([N[jj, ii] for jj, ii in corners], axis=1).reshape(-1, 3)
+    return _tris(tri, nrm, (1.0, 1.0, 1.0), 1.0)
 
 
 @lru_cache(maxsize=2)

@@ -22,7 +22,9 @@ SCENE_FIXED_S = 0.10          # shadow map check, terrain vertex work, programs
 SCENE_S_PER_MPX = 0.25        # the scene pass with 4x MSAA, per megapixel
 SCENE_PREVIEW_S_PER_MPX = 0.12
 COMPOSITE_S_PER_MPX = 0.05
-BLUR_S_PER_MPX = 0.20
+BLUR_S_PER_MPX = 0.25              # the fused blur: 25 mip taps with depth weights, and the pyramid
+SUNLIGHT_S_PER_MPX = 0.08          # sun_through_fog's G-buffer attachment (~50 ms at 1280x720)
+SHAFTS_S_PER_FOG_MPX = 0.08        # 16 shadow-map samples per fog texel (~45 ms at 1280x720)
 ENCODE_S_PER_MPX = {"jpg": 0.01, "png": 0.04, "webp": 0.08}
 # the fog pass's cost per layer comes from each kind (kinds/<name>.py: seconds_per_mpx,
 # extra_seconds), per megapixel of fog target
@@ -52,9 +54,10 @@ def _layer_seconds(layer, fog_mpx: float) -> float:
 
 
 def program_key(still: StillParams) -> tuple:
-    """What a worker's compiled fog program depends on: the layers' variant and the fog
-    scale (a compile-time define)."""
-    return variant(still), still.effects.fog_scale
+    """What a worker's compiled fog program depends on: the layers' variant, the fog scale,
+    and whether it integrates toward the sun and samples shafts (compile-time defines)."""
+    e = still.effects
+    return variant(still), e.fog_scale, e.sun_through_fog, e.shafts > 0
 
 
 def jit_seconds(variant: tuple) -> float:
@@ -84,12 +87,19 @@ def estimate(still: StillParams, msaa: bool = True, fmt: str = "jpg", scale: flo
     for i, layer in enumerate(still.layers):
         if layer.enabled:
             parts[f"layers[{i}] ({KINDS[layer.kind].describe(layer)})"] = _layer_seconds(layer, fog_mpx)
+    if e.sun_through_fog:   # every layer again, along the sun's direction, and the attachment
+        parts["effects.sun_through_fog"] = SUNLIGHT_S_PER_MPX * mpx + sum(
+            _layer_seconds(layer, fog_mpx) for layer in still.layers if layer.enabled)
+    if e.shafts > 0:
+        parts["effects.shafts"] = SHAFTS_S_PER_FOG_MPX * fog_mpx
     n = still.noise
     if uses_noise(still) and (n.size, n.octaves, n.blur, n.seed) != DEFAULT_BAKE:
         parts[f"noise.size = {n.size} (baking the noise tile, once per worker)"] = bake_seconds(n)
     if not compiled:
         key = variant(still)
-        parts[f"compiling the fog program for {len(key)} layers (once per worker)"] = jit_seconds(key)
+        # toward the sun, the layers' code is inlined a second time
+        parts[f"compiling the fog program for {len(key)} layers (once per worker)"] = \
+            jit_seconds(key) * (2 if e.sun_through_fog else 1)
     memory = px * (OUT_BPP + GBUFFER_BPP + 3 + 4) + int(fog_mpx * 1e6) * FOG_BPP
     if msaa:
         memory += px * MSAA_BPP
@@ -97,6 +107,8 @@ def estimate(still: StillParams, msaa: bool = True, fmt: str = "jpg", scale: flo
         memory += px * SUNLIGHT_BPP * (1 + (MSAA_SAMPLES if msaa else 0))
     if e.blur == "separate":
         memory += px * LINEAR_BPP
+    if e.blur == "single":   # the mip pyramid of the colour (and sunlight): a third more
+        memory += px * (8 + (SUNLIGHT_BPP if e.sun_through_fog else 0)) // 3
     seconds = sum(parts.values()) * scale
     return Cost(seconds, memory, {k: v * scale for k, v in parts.items()})
 

@@ -11,7 +11,7 @@
 #include "common/phase.glsl"
 #include "fog/finish.glsl"
 in vec2 vUV;
-uniform sampler2D uColor;         // scene colour, linear (trilinear, mipmapped when blurring)
+uniform sampler2D uColor;         // scene colour, linear (mipmapped when blurring: bilinear in the nearest level)
 uniform sampler2D uInvDist;       // full-resolution 1/distance
 uniform sampler2D uFog;           // (raw T, 1/distance, T toward the sun, lit share) at 1/FOG_SCALE size
 uniform float uShafts;            // how much the view ray's shadowed share takes from the in-scattering
@@ -35,9 +35,9 @@ const float K5[5] = float[5](0.054488685, 0.244201342, 0.402619947, 0.244201342,
 // The fused blur of the scene at px with Gaussian sigma (px). Gawron's 5x5 kernel with its
 // taps s apart covers a Gaussian of sigma s, but on the full-resolution image the gaps
 // between taps show as five ghost copies of a sharp edge once s is a few pixels. Each tap
-// reads the mip level whose texels are s wide (trilinear): a box-and-tent prefilter of
-// sigma ~s/2 that closes the gaps. The two combine to sigma^2 = s^2 (1 + 1/4), so
-// s = sigma / sqrt(1.25). Taps on a surface far (> ~5%) from the centre's in depth count
+// reads, bilinearly, the mip level nearest to texels s wide (log2 s rounded: texels from
+// s/1.4 to 1.4 s): a box-and-tent prefilter of sigma ~s/2 that closes the gaps. The two
+// combine to about sigma^2 = s^2 (1 + 1/4), so s = sigma / sqrt(1.25). Taps on a surface far (> ~5%) from the centre's in depth count
 // less, so a near object does not bleed into the fog behind it, nor the reverse.
 vec3 blurredScene(ivec2 px, float sigma, float invd, float sunLoss, vec2 full) {
     float s = sigma * 0.894427191;
