@@ -221,42 +221,73 @@ def _trees() -> list[np.ndarray]:
     return parts
 
 
-# The land beyond the detailed terrain, out to the horizon: the same height field on a grid
-# whose lines inside [-EXTENT, EXTENT] are the detailed grid's own (so the two meshes share
-# every vertex along the seam: no crack, and no overlap for a coarse facet to poke
-# through) and whose rings beyond grow by SKIRT_GROWTH out to SKIRT_OUTER (within the
-# camera's far plane).
+# The land beyond the detailed terrain, out to the horizon: the same height field on a
+# coarse grid whose rings grow by SKIRT_GROWTH from the detailed grid's edge out to
+# SKIRT_OUTER (within the camera's far plane). The cells along the edge are fans onto the
+# detailed grid's own edge vertices, so the two meshes share every seam vertex: no crack,
+# and no overlap for a coarse facet to poke through.
 SKIRT_OUTER = 3500.0
 SKIRT_GROWTH = 1.3
+SKIRT_INNER_CELLS = 7   # coarse cells along each side of the detailed square
+
+
+def _edge_lines() -> np.ndarray:
+    """The detailed grid's lines along one side, and which of them the coarse grid keeps."""
+    fine = np.linspace(-terrain.EXTENT, terrain.EXTENT, TERRAIN_CELLS)
+    keep = np.round(np.linspace(0, TERRAIN_CELLS - 1, SKIRT_INNER_CELLS + 1)).astype(int)
+    return fine, keep
 
 
 def skirt_coordinates() -> np.ndarray:
-    """The skirt's grid lines along x (and z): the detailed grid's lines, then rings
-    growing outward from its edge."""
+    """The skirt's coarse grid lines along x (and z): some of the detailed grid's lines,
+    then rings growing outward from its edge."""
     E = terrain.EXTENT
     ring = [E]
     while ring[-1] < SKIRT_OUTER:
         ring.append(min(ring[-1] * SKIRT_GROWTH, SKIRT_OUTER))
-    inner = np.linspace(-E, E, TERRAIN_CELLS)
-    return np.concatenate([-np.array(ring[:0:-1]), inner, np.array(ring[1:])])
+    fine, keep = _edge_lines()
+    return np.concatenate([-np.array(ring[:0:-1]), fine[keep], np.array(ring[1:])])
 
 
 def _far_skirt() -> np.ndarray:
-    """The far land as terrain-material triangles: every cell of the skirt's grid outside
-    the detailed terrain, at the terrain's own height."""
+    """The far land as terrain-material triangles, at the terrain's own height: every cell
+    of the coarse grid outside the detailed square; a cell with a side on the square's
+    edge is a fan from its outer corner onto the detailed grid's vertices along that side."""
     E = terrain.EXTENT
+    fine, _ = _edge_lines()
     xs = skirt_coordinates()
-    X, Z = np.meshgrid(xs, xs, indexing="xy")
-    P = np.stack([X, terrain.height(X, Z), Z], axis=-1)
-    N = terrain.normal(X, Z)
     n = len(xs)
-    j, i = np.mgrid[0:n - 1, 0:n - 1]
-    inside = (np.abs(xs[i]) <= E) & (np.abs(xs[i + 1]) <= E) & (np.abs(xs[j]) <= E) & (np.abs(xs[j + 1]) <= E)
-    j, i = j[~inside], i[~inside]
-    corners = [(j, i), (j + 1, i), (j, i + 1), (j, i + 1), (j + 1, i), (j + 1, i + 1)]   # a-c-b, b-c-d
-    tri = np.stack([P[jj, ii] for jj, ii in corners], axis=1).reshape(-1, 3)
-    nrm = np.stack([N[jj, ii] for jj, ii in corners], axis=1).reshape(-1, 3)
-    return _tris(tri, nrm, (1.0, 1.0, 1.0), 1.0)
+
+    def vertex(x, z):
+        return (x, float(terrain.height(x, z)), z)
+
+    tris = []
+    for j in range(n - 1):
+        for i in range(n - 1):
+            x0, x1, z0, z1 = xs[i], xs[i + 1], xs[j], xs[j + 1]
+            if max(abs(x0), abs(x1)) <= E and max(abs(z0), abs(z1)) <= E:
+                continue   # inside the detailed terrain
+            a, b, c, d = vertex(x0, z0), vertex(x1, z0), vertex(x0, z1), vertex(x1, z1)
+            on_edge = None
+            if max(abs(z0), abs(z1)) <= E and (x1 == -E or x0 == E):      # left or right of it
+                x = x1 if x1 == -E else x0
+                far = (b, d) if x0 == E else (a, c)     # the side away from the square
+                edge = [vertex(x, z) for z in fine if z0 <= z <= z1]
+                on_edge = (edge, far)
+            elif max(abs(x0), abs(x1)) <= E and (z1 == -E or z0 == E):    # in front or behind
+                z = z1 if z1 == -E else z0
+                far = (c, d) if z0 == E else (a, b)
+                edge = [vertex(x, z) for x in fine if x0 <= x <= x1]
+                on_edge = (edge, far)
+            if on_edge is None:
+                tris += [a, c, b, b, c, d]
+                continue
+            edge, (f0, f1) = on_edge
+            for k in range(len(edge) - 1):              # the fan from the far side's first corner
+                tris += [f0, edge[k], edge[k + 1]]
+            tris += [f0, edge[-1], f1]
+    pos = np.array(tris, dtype=np.float64)
+    return _tris(pos, terrain.normal(pos[:, 0], pos[:, 2]), (1.0, 1.0, 1.0), 1.0)
 
 
 @lru_cache(maxsize=2)
