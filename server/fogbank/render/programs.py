@@ -12,7 +12,11 @@ from fogbank.render.gl import TEX, set_uniform
 from fogbank.render.glsl import program
 
 FULLSCREEN = "passes/fullscreen.vert"
-MAX_VARIANTS = 48
+# Compiled fog programs kept per worker (LRU), each llvmpipe machine code of a few MB. At
+# 48, with issue 11's default look (its layers inlined twice, toward the sun), the 60 s
+# churn soak's process tree kept growing while the cache filled: 9.9-11.8% after warm-up;
+# at 16 it plateaus (1.5%). A look past the 16th recompiles on its first draw.
+MAX_VARIANTS = 16
 
 
 SHAFT_SAMPLES = 16   # shadow-map samples per view ray for light shafts
