@@ -15,6 +15,8 @@ from typing import Any, Callable
 
 import numpy as np
 
+from fogbank.kinds.rays import velocity
+
 # The per-layer uniform budget: LAYER_VEC4 vec4s of uLayer per layer. MAX_LAYERS x
 # LAYER_VEC4 = 192 vec4s, under the 256 fragment uniform vec4s GL 3.3 guarantees
 # (GL_MAX_FRAGMENT_UNIFORM_COMPONENTS >= 1024) with room for the passes' own uniforms.
@@ -153,7 +155,6 @@ class Packing:
     def wind(self, layer) -> np.ndarray:
         """The velocity the layer's density slides with: the wind for a wind-sensitive
         layer, plus the layer's own drift (kinds/rays.velocity)."""
-        from fogbank.kinds.rays import velocity
         return velocity(layer, self.fog.wind.vector())
 
     def slid(self, layer) -> np.ndarray:

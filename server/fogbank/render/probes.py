@@ -17,6 +17,16 @@ def fog_only(r, still, raymarch_steps: int | None = None, read: bool = True):
     layers are raymarched instead of integrated in closed form. The time covers the GL
     work of the fog and particle passes (uploads included), not the fog plan's CPU work
     (packing, particle simulation), which runs on the preparation thread before it."""
+    ms, f = _fog_frame(r, still, raymarch_steps)
+    if not read:
+        return ms
+    a = fog_texels(f)
+    return ms, a[..., 0].copy(), a[..., 1].copy(), f.view
+
+
+def _fog_frame(r, still, raymarch_steps: int | None = None):
+    """(milliseconds of the fog and particle passes, the frame) after the cached scene
+    passes, slot "bench"."""
     f = r.begin(still, slot="bench", msaa=True)
     f.raymarch_steps = raymarch_steps
     for p in (ShadowPass(), SkyPass(), ScenePass()):
@@ -27,11 +37,7 @@ def fog_only(r, still, raymarch_steps: int | None = None, read: bool = True):
     for p in (FogPass(), ParticlesPass()):
         p.run(r, f)
     r.ctx.finish()
-    ms = (time.perf_counter() - t0) * 1000.0
-    if not read:
-        return ms
-    a = fog_texels(f)
-    return ms, a[..., 0].copy(), a[..., 1].copy(), f.view
+    return (time.perf_counter() - t0) * 1000.0, f
 
 
 def fog_texels(f) -> np.ndarray:
@@ -43,7 +49,4 @@ def fog_texels(f) -> np.ndarray:
 
 def fog_target(r, still) -> np.ndarray:
     """fog_only's passes, then the whole fog target (fog_texels)."""
-    f = r.begin(still, slot="bench", msaa=True)
-    for p in (ShadowPass(), SkyPass(), ScenePass(), FogPass(), ParticlesPass()):
-        p.run(r, f)
-    return fog_texels(f)
+    return fog_texels(_fog_frame(r, still)[1])
