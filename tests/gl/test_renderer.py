@@ -226,10 +226,12 @@ def test_blur_softens_edges_only_where_there_is_fog(renderer, mode):
         def energy(img):
             return (np.diff(img.mean(axis=2), axis=1) ** 2).sum()
         assert energy(soft) < 0.8 * energy(sharp)
-    # no fog: no blur
+    # no fog: no blur (separate: up to 1 level at silhouettes, whose two surfaces' mix is
+    # stored in the RGBA16F linear target before the output's rounding)
     clear = base.model_copy(update={"layers": []})
-    assert np.array_equal(renderer.render(clear),
-                          renderer.render(clear.model_copy(update={"effects": eff})))
+    still_diff = np.abs(renderer.render(clear).astype(int) -
+                        renderer.render(clear.model_copy(update={"effects": eff})).astype(int))
+    assert int(still_diff.max()) <= (0 if mode == "single" else 1)
 
 
 def test_any_valid_look_renders(renderer):
@@ -613,3 +615,56 @@ def test_distant_noise_is_filtered_toward_the_supersampled_picture(renderer):
         band = ground & (dist > lo) & (dist < hi)
         assert int(band.sum()) > 500
         assert float(np.sqrt(np.mean((got - want)[band] ** 2))) <= bound
+
+
+# The 4x MSAA sample positions, in eighths of a pixel from its bottom-left corner: the
+# standard pattern (D3D's, used by Mesa and the common GPUs). The fog-free half of the
+# test below checks it: with another pattern the hand coverage would not match.
+MSAA_POSITIONS = ((3, 1), (7, 3), (1, 5), (5, 7))
+
+
+@pytest.mark.parametrize("density", [0.0, 0.03])
+def test_silhouettes_match_the_per_sample_fog_of_a_hand_raster(renderer, density):
+    """Along every silhouette the frame equals the mean over the pixel's four MSAA samples
+    of each sample's own blend, T_s c_s + (1 - T_s) f, with the samples' rays cast by hand
+    against the calibration scene and T_s from the float64 reference at each sample's own
+    distance. A single T per pixel (the averaged inverse distance a blit resolve gives)
+    fogged the far surface with the near one's fog: at density 0.03, 62 of the 481 edge
+    pixels were off by more than 3 levels (p99 7.0, an outline); with the two-surface
+    resolve none is (p99 1.1, max 1.6). Without fog the same check holds the sample
+    pattern and the coverage themselves (p99 1.0)."""
+    # a camera off the calibration one's round numbers, which put box edges exactly on
+    # sample positions (where the rasteriser's tie rule, not the geometry, decides)
+    still = calibration_still(layers=[{"kind": "homogeneous", "density": density}],
+                              camera={"position": (0.3, 6.1, 0.0), "yaw": 2.0, "pitch": -6.3, "fov": 60.0},
+                              effects={"scatter": 0.0, "sky_distance": 400.0, "fog_scale": 1,
+                                       "blur": "off"})
+    img = renderer.render(still).astype(np.float64)
+    view = cam.view(still.camera, W, H)
+    py, px = np.mgrid[0:H, 0:W]
+    gl_y = (H - 1 - py).ravel()
+    albedo = {-1: scenes.CALIBRATION_SKY, 0: scenes.CALIBRATION_GROUND}
+    albedo.update({i: c for i, (_, _, c) in enumerate(scenes.CALIBRATION_BOXES, start=1)})
+    lin = {k: np.array(srgb_to_linear(c)) for k, c in albedo.items()}
+    fog_lin = np.array(srgb_to_linear(still.fog_color))
+    acc = np.zeros((H * W, 3))
+    objs = []
+    for sx, sy in MSAA_POSITIONS:
+        w = hand_rays(still.camera, px.ravel() + sx / 8 - 0.5, gl_y + sy / 8 - 0.5, W, H)
+        d, obj = _cast(view.eye, w)
+        obj = np.where(d < cam.FAR, obj, -1)
+        d = np.where(obj == -1, still.effects.sky_distance, d)
+        T = reference(still.fog(), np.broadcast_to(view.eye, w.shape), w, d, still.time)[:, None]
+        c = np.array([lin[o] for o in obj])
+        acc += (T * c + (1 - T) * fog_lin) / 4
+        objs.append(obj)
+    objs = np.array(objs)
+    edge = (objs != objs[0]).any(axis=0)            # the samples see more than one object
+    edge = edge.reshape(H, W)
+    edge[[0, -1], :] = edge[:, [0, -1]] = False
+    want = _to_srgb(acc).reshape(H, W, 3)
+    err = np.abs(img - want)[edge].max(axis=1)
+    assert int(edge.sum()) > 400                   # boxes on ground and sky, the horizon
+    assert float(np.quantile(err, 0.99)) <= 2.5
+    # a sample within float rounding of an edge may fall either side (1 pixel here)
+    assert int(np.count_nonzero(err > 3)) <= 2

@@ -7,7 +7,7 @@ import time
 
 import numpy as np
 
-from fogbank.render.passes import FogPass, ParticlesPass, ScenePass, ShadowPass, SkyPass
+from fogbank.render.passes import FogPass, ParticlesPass, ResolvePass, ScenePass, ShadowPass, SkyPass
 
 
 def fog_only(r, still, raymarch_steps: int | None = None, read: bool = True):
@@ -29,7 +29,7 @@ def _fog_frame(r, still, raymarch_steps: int | None = None):
     passes, slot "bench"."""
     f = r.begin(still, slot="bench", msaa=True)
     f.raymarch_steps = raymarch_steps
-    for p in (ShadowPass(), SkyPass(), ScenePass()):
+    for p in (ShadowPass(), SkyPass(), ScenePass(), ResolvePass()):
         p.run(r, f)
     f.fog_plan()
     r.ctx.finish()

@@ -11,11 +11,14 @@ from fogbank.render.cache import ByteLRU
 from fogbank.render.gl import release_fbo
 
 MSAA_SAMPLES = 4
+SILHOUETTE_TILE = 8   # px: the composite redoes pixels with two surfaces by tiles of this size
 # bytes per pixel of each GPU allocation (for the caches' byte budgets and the cost model)
 OUT_BPP = 4                                   # RGBA8 output renderbuffer
 MSAA_BPP = MSAA_SAMPLES * (8 + 4 + 4)         # RGBA16F + R32F + depth24/stencil8, per sample
 LINEAR_BPP = 2 * 8                            # two RGBA16F blur targets
-GBUFFER_BPP = 8 + 4 + 4                       # RGBA16F colour, R32F inverse distance, depth
+# near surface: RGBA16F colour, R32F inverse distance, depth; far surface (two-surface
+# resolve, passes/resolve.frag): RGBA16F colour and coverage, R32F inverse distance
+GBUFFER_BPP = 8 + 4 + 4 + 8 + 4
 SUNLIGHT_BPP = 8                              # RGBA16F direct sunlight (sun_through_fog only), per sample
 FOG_BPP = 16                                  # RGBA32F (raw T, 1/distance, T toward the sun, lit share)
 
@@ -51,15 +54,16 @@ class Targets:
 
     def msaa(self, sunlight: bool = False) -> moderngl.Framebuffer:
         """Colour (RGBA16F), inverse distance (R32F), with `sunlight` the direct sunlight
-        (RGBA16F), and depth, MSAA_SAMPLES per pixel. The sunlight attachment costs every
+        (RGBA16F), and depth, MSAA_SAMPLES per pixel; the colours are multisample textures,
+        read sample by sample by the resolve pass. The sunlight attachment costs every
         frame (about 50 ms of 300 at 1280x720 on llvmpipe), so only looks that dim the
         sunlight by the fog have it."""
         if sunlight not in self.msaa_fbos:
             ctx, size = self.ctx, self.size
-            colors = [ctx.renderbuffer(size, 4, samples=MSAA_SAMPLES, dtype="f2"),
-                      ctx.renderbuffer(size, 1, samples=MSAA_SAMPLES, dtype="f4")]
+            colors = [ctx.texture(size, 4, samples=MSAA_SAMPLES, dtype="f2"),
+                      ctx.texture(size, 1, samples=MSAA_SAMPLES, dtype="f4")]
             if sunlight:
-                colors.append(ctx.renderbuffer(size, 4, samples=MSAA_SAMPLES, dtype="f2"))
+                colors.append(ctx.texture(size, 4, samples=MSAA_SAMPLES, dtype="f2"))
             self.msaa_fbos[sunlight] = ctx.framebuffer(
                 color_attachments=colors, depth_attachment=ctx.depth_renderbuffer(size, samples=MSAA_SAMPLES))
         return self.msaa_fbos[sunlight]
@@ -87,13 +91,22 @@ class Targets:
 class GBuffer:
     """A cached scene pass (colour, inverse distance and, for looks with sun_through_fog,
     the direct sunlight) for one slot (a streaming session, or stills) and size; redrawn
-    only when scene, camera, sun or MSAA change."""
+    only when scene, camera, sun or MSAA change. With MSAA it holds two surfaces per pixel
+    (passes/resolve.frag): the near one in `color`, `invdist` and `sunlight`, the far one
+    in the `far_*` textures, with the near one's coverage in far_color's alpha. A preview
+    (no MSAA) draws straight into `fbo` and has one surface (`two_surfaces` False)."""
     fbo: moderngl.Framebuffer      # colour + inverse distance (+ sunlight) + single-sample depth
+    resolve_fbo: moderngl.Framebuffer   # the resolve's outputs: near, far (and their sunlight)
     color: moderngl.Texture
     invdist: moderngl.Texture
     sunlight: moderngl.Texture | None
+    far_color: moderngl.Texture
+    far_invdist: moderngl.Texture
+    far_sunlight: moderngl.Texture | None
+    tiles_fbo: moderngl.Framebuffer     # R8, one texel per SILHOUETTE_TILE tile: 1 where a pixel has two surfaces
     scene_key: object = None
     mips_key: object = None        # the scene pass whose mip pyramid the textures hold
+    two_surfaces: bool = False     # the far textures hold this scene pass's far surfaces
 
     def mipmaps(self) -> None:
         """Build the colour's (and sunlight's) mip pyramid once per scene pass drawn."""
@@ -106,13 +119,22 @@ class GBuffer:
             self.mips_key = self.scene_key
 
     def nbytes(self) -> int:
-        n = self.color.width * self.color.height * (GBUFFER_BPP + (SUNLIGHT_BPP if self.sunlight else 0))
+        n = self.color.width * self.color.height * (GBUFFER_BPP + (2 * SUNLIGHT_BPP if self.sunlight else 0))
         if self.mips_key is not None:   # the colour's (and sunlight's) mip pyramid: a third more
             n += self.color.width * self.color.height * (8 + (SUNLIGHT_BPP if self.sunlight else 0)) // 3
         return n
 
+    @property
+    def tiles(self) -> moderngl.Texture:
+        return self.tiles_fbo.color_attachments[0]
+
     def release(self) -> None:
-        release_fbo(self.fbo)   # colour, inverse distance and the depth renderbuffer
+        release_fbo(self.tiles_fbo)
+        self.resolve_fbo.release()   # its attachments are the near textures (released with fbo) and the far ones
+        for tex in (self.far_color, self.far_invdist, self.far_sunlight):
+            if tex is not None:
+                tex.release()
+        release_fbo(self.fbo)   # colour, inverse distance (sunlight) and the depth renderbuffer
 
 
 class TargetCache:
@@ -136,17 +158,24 @@ class TargetCache:
     def gbuffer(self, slot: str, w: int, h: int, sunlight: bool = False) -> GBuffer:
         def make() -> GBuffer:
             ctx = self.ctx
-            color = ctx.texture((w, h), 4, dtype="f2")
-            color.repeat_x = color.repeat_y = False
-            invdist = ctx.texture((w, h), 1, dtype="f4")
-            invdist.filter = (moderngl.NEAREST, moderngl.NEAREST)
-            sun = None
-            if sunlight:
-                sun = ctx.texture((w, h), 4, dtype="f2")
-                sun.repeat_x = sun.repeat_y = False
+
+            def tex(components: int, dtype: str, nearest: bool = False) -> moderngl.Texture:
+                t = ctx.texture((w, h), components, dtype=dtype)
+                t.repeat_x = t.repeat_y = False
+                if nearest:
+                    t.filter = (moderngl.NEAREST, moderngl.NEAREST)
+                return t
+            color, invdist = tex(4, "f2"), tex(1, "f4", nearest=True)
+            far_color, far_invdist = tex(4, "f2", nearest=True), tex(1, "f4", nearest=True)
+            sun, far_sun = (tex(4, "f2"), tex(4, "f2", nearest=True)) if sunlight else (None, None)
             fbo = ctx.framebuffer(color_attachments=[color, invdist] + ([sun] if sun else []),
                                   depth_attachment=ctx.depth_renderbuffer((w, h)))
-            return GBuffer(fbo, color, invdist, sun)
+            resolve_fbo = ctx.framebuffer(color_attachments=[color, invdist, far_color, far_invdist] +
+                                          ([sun, far_sun] if sun else []))
+            tiles = ctx.texture((-(-w // SILHOUETTE_TILE), -(-h // SILHOUETTE_TILE)), 1)
+            tiles.filter = (moderngl.NEAREST, moderngl.NEAREST)
+            return GBuffer(fbo, resolve_fbo, color, invdist, sun, far_color, far_invdist, far_sun,
+                           ctx.framebuffer(color_attachments=[tiles]))
         return self._gbuffers.get((slot, w, h, sunlight), make)
 
     def trim(self, keep_targets=(), keep_gbuffers=()) -> None:

@@ -103,8 +103,8 @@ def estimate(still: StillParams, msaa: bool = True, fmt: str = "jpg", scale: flo
     memory = px * (OUT_BPP + GBUFFER_BPP + 3 + 4) + int(fog_mpx * 1e6) * FOG_BPP
     if msaa:
         memory += px * MSAA_BPP
-    if e.sun_through_fog:   # the direct sunlight attachment, in the G-buffer and the MSAA target
-        memory += px * SUNLIGHT_BPP * (1 + (MSAA_SAMPLES if msaa else 0))
+    if e.sun_through_fog:   # the direct sunlight: near and far surface in the G-buffer, and the MSAA target
+        memory += px * SUNLIGHT_BPP * (2 + (MSAA_SAMPLES if msaa else 0))
     if e.blur == "separate":
         memory += px * LINEAR_BPP
     if e.blur == "single":   # the mip pyramid of the colour (and sunlight): a third more

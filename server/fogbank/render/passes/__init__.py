@@ -3,10 +3,11 @@ frame's inputs are the look, the view and the fog plan (render/frame.py).
 
     shadow     look.sun, meshes              -> shadow_map
     sky        look.sun, view                -> scene_target
-    scene      meshes, shadow_map, view      -> scene_target, gbuffer (resolved)
+    scene      meshes, shadow_map, view      -> scene_target
+    resolve    scene_target                  -> gbuffer (near and far surface per pixel)
     fog        gbuffer.invdist, fog_plan     -> fog
     particles  gbuffer.invdist, fog_plan     -> fog (clarity multiplied in)
-    composite  gbuffer.color, gbuffer.invdist, fog -> out (or linear, blur separate)
+    composite  gbuffer, fog                  -> out (or linear, blur separate)
     blur       linear                        -> out
     output     out                           -> image
 """
@@ -19,12 +20,13 @@ from fogbank.render.passes.composite import CompositePass
 from fogbank.render.passes.fog import FogPass
 from fogbank.render.passes.output import OutputPass
 from fogbank.render.passes.particles import ParticlesPass
+from fogbank.render.passes.resolve import ResolvePass
 from fogbank.render.passes.scene import ScenePass
 from fogbank.render.passes.shadow import ShadowPass
 from fogbank.render.passes.sky import SkyPass
 
 FRAME_PASSES: tuple[Pass, ...] = (
-    ShadowPass(), SkyPass(), ScenePass(), FogPass(), ParticlesPass(), CompositePass(),
+    ShadowPass(), SkyPass(), ScenePass(), ResolvePass(), FogPass(), ParticlesPass(), CompositePass(),
     BlurPass(), OutputPass(),
 )
 

@@ -1,6 +1,6 @@
 """The scene pass: terrain (nearest chunks first) and objects, lit by the sun with the
-shadow map, into the scene target; with MSAA, resolved into the slot's G-buffer (colour
-and inverse distance). Cached per slot while scene, camera, sun and MSAA stay."""
+shadow map, into the scene target (the MSAA target, resolved by the resolve pass, or for
+a preview the slot's G-buffer). Cached per slot while scene, camera, sun and MSAA stay."""
 
 from __future__ import annotations
 
@@ -16,7 +16,7 @@ from fogbank.render.resources import SHADOW_SIZE
 class ScenePass(Pass):
     name = "scene"
     reads = ("meshes", "shadow_map", "view", "scene_target")
-    writes = ("scene_target", "gbuffer.color", "gbuffer.invdist", "gbuffer.sunlight")
+    writes = ("scene_target",)
 
     def run(self, r, f) -> None:
         if f.scene_cached:
@@ -40,6 +40,4 @@ class ScenePass(Pass):
             else:
                 scene_vao.render(moderngl.TRIANGLES)
         ctx.disable(moderngl.DEPTH_TEST)
-        if f.msaa:
-            ctx.copy_framebuffer(f.gbuffer.fbo, target)  # MSAA resolve of every colour attachment
         f.gbuffer.scene_key = f.scene_key

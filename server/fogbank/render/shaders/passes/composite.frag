@@ -2,10 +2,13 @@
 // in-scattering (Gawron 3.2) and, optionally, the fog blur fused in (Gawron 3.4, single
 // pass: the scene under the fog is blurred with a Gaussian whose sigma follows 1 - T,
 // 5x5 taps on the scene colour's mip pyramid, so that no tap gap shows as a ghost).
-// T comes from the fog target, upsampled with depth awareness when it is smaller.
+// T comes from the fog target, upsampled with depth awareness when it is smaller. With
+// MSAA a pixel can hold two surfaces (passes/resolve.frag): each is fogged at its own
+// distance and the two are mixed by coverage, so a silhouette gets no outline.
 // Defined by the renderer: FOG_SCALE (1, 2, 4), BLUR_MODE (0 off, 1 fused here,
-// 2 separate passes follow) and SUN_LIGHT (1: the G-buffer has the direct sunlight, to be
-// dimmed by the fog toward the sun).
+// 2 separate passes follow), SUN_LIGHT (1: the G-buffer has the direct sunlight, to be
+// dimmed by the fog toward the sun) and TWO_SURFACES (0: every pixel's near surface;
+// 1: a second draw that redoes the pixels with a far surface, both mixed).
 #include "common/camera.glsl"
 #include "common/srgb.glsl"
 #include "common/phase.glsl"
@@ -16,6 +19,9 @@ uniform sampler2D uInvDist;       // full-resolution 1/distance
 uniform sampler2D uFog;           // (raw T, 1/distance, T toward the sun, lit share) at 1/FOG_SCALE size
 uniform float uShafts;            // how much the view ray's shadowed share takes from the in-scattering
 uniform sampler2D uSunLight;      // the direct sunlight in the scene colour, linear
+uniform sampler2D uFarColor;      // the pixel's far surface colour, linear; a: the near surface's coverage
+uniform sampler2D uFarInvDist;    // its 1/distance
+uniform sampler2D uFarSunLight;   // its direct sunlight, linear
 uniform vec3 uFwd, uRight, uUp;
 uniform vec3 uFogColor;           // linear
 uniform vec3 uSunDir;
@@ -39,7 +45,7 @@ const float K5[5] = float[5](0.054488685, 0.244201342, 0.402619947, 0.244201342,
 // s/1.4 to 1.4 s): a box-and-tent prefilter of sigma ~s/2 that closes the gaps. The two
 // combine to about sigma^2 = s^2 (1 + 1/4), so s = sigma / sqrt(1.25). Taps on a surface far (> ~5%) from the centre's in depth count
 // less, so a near object does not bleed into the fog behind it, nor the reverse.
-vec3 blurredScene(ivec2 px, float sigma, float invd, float sunLoss, vec2 full) {
+vec3 blurredScene(ivec2 px, float sigma, float invd, float sunLoss, vec2 full, vec3 own) {
     float s = sigma * 0.894427191;
     float lod = max(log2(s), 0.0);
     vec3 acc = vec3(0.0);
@@ -61,7 +67,9 @@ vec3 blurredScene(ivec2 px, float sigma, float invd, float sunLoss, vec2 full) {
             wsum += w;
         }
     }
-    return acc / wsum;   // the centre tap alone weighs 0.16: wsum > 0
+    // a far surface seen in a sliver of this pixel may have no tap at its depth (the
+    // weights of the others underflow to 0): its own colour, unblurred
+    return wsum > 1e-6 ? acc / wsum : own;
 }
 
 // Depth-aware upsample (Biri 4.3; "nearest-depth" joint bilateral): the four nearest fog
@@ -94,14 +102,37 @@ vec3 fogT(ivec2 px, float invd) {
 #endif
 }
 
-void main() {
-    ivec2 px = ivec2(gl_FragCoord.xy);
-    vec2 full = vec2(textureSize(uColor, 0));
-    float invd = texelFetch(uInvDist, px, 0).r;
-    vec3 Ts = fogT(px, invd);
+// T of a pixel's far surface, which the fog texel under the pixel (its block's nearest
+// surface) need not see: the 3x3 fog texels around weighted by closeness in depth and in
+// the image, or, with none on this surface, the closest in depth.
+vec3 fogTAround(ivec2 px, float invd) {
+    ivec2 size = textureSize(uFog, 0);
+    vec2 p = (vec2(px) + 0.5) / float(FOG_SCALE) - 0.5;
+    ivec2 c = ivec2(round(p));
+    vec3 acc = vec3(0.0), bestT = vec3(1.0);
+    float wsum = 0.0, best = 1e9;
+    for (int y = -1; y <= 1; ++y) {
+        for (int x = -1; x <= 1; ++x) {
+            ivec2 q = clamp(c + ivec2(x, y), ivec2(0), size - 1);
+            vec4 s = texelFetch(uFog, q, 0);
+            // as fogT: relative depth difference, 1e-6 1/m keeps sky-vs-sky at 0
+            float rel = abs(s.g - invd) / max(max(s.g, invd), 1e-6);
+            vec2 dq = vec2(q) - p;
+            float w = exp(-dot(dq, dq) - rel * rel * 400.0);
+            acc += w * s.rba;
+            wsum += w;
+            if (rel < best) { best = rel; bestT = s.rba; }
+        }
+    }
+    return wsum > 1e-4 ? acc / wsum : bestT;
+}
+
+// One surface of the pixel under the fog: (colour, fog transmittance T). `far` picks how
+// its T is found (fogTAround for a far surface).
+vec4 fogged(ivec2 px, vec3 scene, vec3 sunlight, float invd, vec3 w, vec2 full, bool far) {
+    vec3 Ts = far ? fogTAround(px, invd) : fogT(px, invd);
     float T = fogFinish(Ts.x);
     float sunLoss = 1.0 - Ts.y;   // the share of the direct sunlight the fog takes away
-    vec3 w = viewRay(vUV * 2.0 - 1.0, uFwd, uRight, uUp);
     // Gawron eqs. 5-8: p_s = (WorldPos - CameraPos) + ScatterStartDist, the scalar added to
     // each component as in the paper's Listing 1; F = max(0, p_s/|p_s| . L)^exponent;
     // C_fog + C_scatter F. With no start distance p_s/|p_s| is the view ray itself. With
@@ -111,16 +142,42 @@ void main() {
     float mu = dot(ws, uSunDir);
     float F = uPhaseHG ? phaseHG(mu, uAnisotropy) : pow(max(mu, 0.0), uScatterExponent);
     vec3 fog = uFogColor + uScatterColor * F * mix(1.0, Ts.z, uShafts);
-    vec3 scene = texelFetch(uColor, px, 0).rgb;
 #if SUN_LIGHT
-    scene -= sunLoss * texelFetch(uSunLight, px, 0).rgb;
+    scene -= sunLoss * sunlight;
 #endif
     if (BLUR_MODE == 1) {
         float sigma = uBlurSigma * pow(1.0 - T, uBlurExponent);
         if (sigma > 0.05)   // below 0.05 px the kernel is the identity to 8 bits
-            scene = blurredScene(px, sigma, invd, sunLoss, full);
+            scene = blurredScene(px, sigma, invd, sunLoss, full, scene);
     }
-    vec3 c = T * scene + (1.0 - T) * fog;
-    if (BLUR_MODE == 2) fColor = vec4(c, 1.0 - T);     // linear, fog amount for the blur
-    else fColor = vec4(outputColor(c, vec2(px)), 1.0);
+    return vec4(T * scene + (1.0 - T) * fog, T);
+}
+
+void main() {
+    ivec2 px = ivec2(gl_FragCoord.xy);
+#if TWO_SURFACES
+    // The second draw, over the pixels that see two surfaces only (about 1%): the others
+    // leave at once. A branch would not do: llvmpipe runs both sides of every branch
+    // under a lane mask, so the far surface's work would cost every pixel (the
+    // composite took twice as long); a discard that kills every lane ends the shader.
+    vec4 far = texelFetch(uFarColor, px, 0);
+    if (far.a >= 1.0) discard;
+#endif
+    vec2 full = vec2(textureSize(uColor, 0));
+    vec3 w = viewRay(vUV * 2.0 - 1.0, uFwd, uRight, uUp);
+    vec3 sun = vec3(0.0);
+#if SUN_LIGHT
+    sun = texelFetch(uSunLight, px, 0).rgb;
+#endif
+    vec4 c = fogged(px, texelFetch(uColor, px, 0).rgb, sun, texelFetch(uInvDist, px, 0).r, w, full, false);
+#if TWO_SURFACES
+    vec3 farSun = vec3(0.0);
+#if SUN_LIGHT
+    farSun = texelFetch(uFarSunLight, px, 0).rgb;
+#endif
+    vec4 cf = fogged(px, far.rgb, farSun, texelFetch(uFarInvDist, px, 0).r, w, full, true);
+    c = mix(cf, c, far.a);   // the two surfaces by coverage
+#endif
+    if (BLUR_MODE == 2) fColor = vec4(c.rgb, 1.0 - c.a);     // linear, fog amount for the blur
+    else fColor = vec4(outputColor(c.rgb, vec2(px)), 1.0);
 }
