@@ -113,7 +113,8 @@ def calibration_still(**fog):
 ])
 @pytest.mark.parametrize("effects", [{}, {"density": 1.7, "max_opacity": 0.8, "start_distance": 12.0},
                                      {"cutoff_distance": 60.0, "cutoff_mode": "fog", "max_opacity": 0.9},
-                                     {"cutoff_distance": 60.0, "cutoff_mode": "clear"}])
+                                     {"cutoff_distance": 60.0, "cutoff_mode": "clear"},
+                                     {"sky_affect": 0.3}])
 def test_calibration_pixels_match_reference_blend(renderer, layers, effects):
     still = calibration_still(layers=layers, time=4.0, density=effects.get("density", 1.0))
     eff = {k: v for k, v in effects.items() if k != "density"}
@@ -142,6 +143,8 @@ def _check_pixels(renderer, still, min_share=0.8):
     sel = same.ravel()
     d = np.where(obj.ravel() == -1, still.effects.sky_distance, d)[sel]
     T = reference(still.fog(), np.broadcast_to(view.eye, (sel.sum(), 3)), w[sel], d, still.time)
+    # the sky shows sky_affect of its fog (Godot's sky affect)
+    T = np.where(obj.ravel()[sel] == -1, 1 - still.effects.sky_affect * (1 - T), T)
     albedo = {-1: scenes.CALIBRATION_SKY, 0: scenes.CALIBRATION_GROUND}
     albedo.update({i: c for i, (_, _, c) in enumerate(scenes.CALIBRATION_BOXES, start=1)})
     scene_lin = np.array([srgb_to_linear(albedo[o]) for o in obj.ravel()[sel]])
@@ -494,7 +497,10 @@ def test_light_shafts_are_the_lit_share_of_jittered_samples_along_the_view_ray(r
     (slabs), using only texels whose points all lie within 150 m of the shadow map's
     centre (inside its cube whatever the sun). The shadow map's 0.15 m texels and bias
     move the boxes' shadow edges a little: the mean error is at most 0.004 (0.0027
-    measured; a jitter fixed at 0.5 gives 0.0059) and 95% of texels are within 2/N. And
+    measured; a jitter fixed at 0.5 gives 0.0059) and 95% of texels are within 2/N. A
+    frame filters the jittered shares (passes/fog_filter.frag): the filtered target equals
+    the 3x3 depth-weighted mean of the hand shares, written here in numpy, within a mean
+    of 0.004 (0.0026 measured; the unfiltered target is 0.0067 from it). And
     the composite takes the in-scattered light times (1 - share) away: frames with and
     without shafts differ by (1 - T) C_scatter F (1 - share) per pixel."""
     from fogbank.render.probes import fog_target
@@ -533,6 +539,21 @@ def test_light_shafts_are_the_lit_share_of_jittered_samples_along_the_view_ray(r
     err = np.abs(got - want)[sel]
     assert float(err.mean()) <= 0.004
     assert float(np.percentile(err, 95)) <= 2 / N
+    # the frame's filter: each share the 3x3 mean, weighted by exp(-400 rel^2) of the
+    # relative difference in inverse distance (texels past the image edge clamp to it)
+    af = fog_target(renderer, still, filtered=True)
+    inv2, want2 = invd.reshape(h, w_), want.reshape(h, w_)
+    acc, wsum = np.zeros((h, w_)), np.zeros((h, w_))
+    for dy in (-1, 0, 1):
+        for dx in (-1, 0, 1):
+            yy, xx = np.clip(py + dy, 0, h - 1), np.clip(px + dx, 0, w_ - 1)
+            rel = np.abs(inv2[yy, xx] - inv2) / np.maximum(np.maximum(inv2[yy, xx], inv2), 1e-6)
+            wgt = np.exp(-rel * rel * 400.0)
+            acc += wgt * want2[yy, xx]
+            wsum += wgt
+    err_f = np.abs(af[..., 3].astype(np.float64) - acc / wsum).ravel()[sel]
+    assert float(err_f.mean()) <= 0.004
+    a = af
     # the composite: the in-scattering lost to the shafts, pixel by pixel (top row first)
     plain = still.model_copy(update={"effects": still.effects.model_copy(update={"shafts": 0.0})})
     diff = srgb_to_linear_array(renderer.render(plain)) - srgb_to_linear_array(renderer.render(still))
@@ -668,3 +689,63 @@ def test_silhouettes_match_the_per_sample_fog_of_a_hand_raster(renderer, density
     assert float(np.quantile(err, 0.99)) <= 2.5
     # a sample within float rounding of an edge may fall either side (1 pixel here)
     assert int(np.count_nonzero(err > 3)) <= 2
+
+
+def ign(x, y):
+    """Interleaved gradient noise (Jimenez 2014) of whole pixel coordinates, in float32 as
+    the GPU evaluates it."""
+    f32 = np.float32
+    d = f32(x) * f32(0.06711056) + f32(y) * f32(0.00583715)
+    return np.mod(f32(52.9829189) * np.mod(d, f32(1.0)), f32(1.0)).astype(np.float64)
+
+
+def test_volume_noise_points_are_jittered_per_pixel_within_the_stated_bound(renderer):
+    """A volume noise whose sample cap binds (4 points over 30-700 m): each fog texel's T
+    equals the float64 quadrature with the points at the share j of their intervals, j the
+    texel's own interleaved gradient noise (at pixel + (7, 13)), written here in numpy.
+    (Rays past 700 m are left out: there the frame filters the noise by its footprint,
+    tests/gl/test_renderer.py::test_distant_noise_is_filtered_toward_the_supersampled_picture.)
+    The midpoint rule (j = 0.5 everywhere, as before) misses by far more; and the picture
+    is deterministic. The sample count keeps the stated bound for any j
+    (kinds/noise.glsl): tested on the float64 reference in tests/unit/test_reference.py."""
+    from fogbank.kinds import noise as noise_kind
+    from fogbank.kinds.reference import _env, _noise_tex
+    from fogbank.render.probes import fog_only
+    still = calibration_still(layers=[{"kind": "noise", "mode": "volume", "density": 0.02,
+                                       "scale": 300.0, "samples": 4}],
+                              effects={"scatter": 0.0, "sky_distance": 400.0, "fog_scale": 1})
+    _, T, invd, view = fog_only(renderer, still)            # bottom row first
+    _, T2, _, _ = fog_only(renderer, still)
+    assert np.array_equal(T, T2)
+    h, w_ = T.shape
+    gy, gx = np.mgrid[0:h, 0:w_]
+    d = np.where(invd > 0, 1.0 / np.maximum(invd, 1e-30), 400.0).ravel().astype(np.float64)
+    rays = hand_rays(still.camera, gx.ravel(), gy.ravel(), w_, h)
+    fog = still.fog()
+    layer = fog.layers[0]
+    env = _env(fog, fog.density, _noise_tex(fog))
+    eye = np.broadcast_to(view.eye, rays.shape)
+    t = np.zeros(len(d))
+    j = ign(gx.ravel() + 7, gy.ravel() + 13)
+    want = np.exp(-noise_kind.optical_depth(layer, eye, rays, d, t, env, jitter=j))
+    mid = np.exp(-noise_kind.optical_depth(layer, eye, rays, d, t, env))
+    got = T.ravel().astype(np.float64)
+    # within 700 m every point samples the exact trilinear noise (one noise texel is 4.7 m;
+    # a fog texel spans 0.0064 rad, 4.5 m at 700 m)
+    near = d <= 700.0
+    capped = noise_kind.volume_samples(layer, env.tex, rays, d, env.weight, j) == layer.samples
+    assert near.mean() > 0.8 and capped[near].mean() > 0.9   # the cap binds: the jitter shows
+    err = np.abs(got - want)[near]
+    assert float(err.max()) <= 1e-4
+    assert float(np.sqrt(np.mean((got - mid)[near] ** 2))) >= 10 * float(np.sqrt(np.mean(err ** 2)))
+    # The frame's filter (3x3 depth-aware mean of the fog texels, passes/fog_filter.frag)
+    # turns the jitter into a stratified estimate: against the same noise with 128 points
+    # (float64), RMS 0.00092 where the midpoint rule's 4 points err by 0.0023 (bound: 1/2;
+    # in the countryside at 60 m per tile and 6 points, 0.0044 against 0.023).
+    _, Tf, _, _ = fog_only(renderer, still, filtered=True)
+    fine = layer.model_copy(update={"samples": 128})
+    ref = np.exp(-noise_kind.optical_depth(fine, eye, rays, d, t, env))
+    rms_filtered = float(np.sqrt(np.mean((Tf.ravel().astype(np.float64) - ref)[near] ** 2)))
+    rms_midpoint = float(np.sqrt(np.mean((mid - ref)[near] ** 2)))
+    assert rms_filtered <= rms_midpoint / 2
+

@@ -39,21 +39,26 @@ def slope_bound(tex, omega, scale):
     return tex.shape[0] / scale * (np.abs(omega) @ np.asarray(bake.texel_steps(tex)))
 
 
-def volume_samples(layer, tex, omega, d, weight=1.0):
-    """Samples per ray: the bound under NOISE_TOL, within [1, layer.samples]. The shader
-    counts the optical depth with the global density (`weight`) inside, and so does this."""
+def volume_samples(layer, tex, omega, d, weight=1.0, jitter=0.5):
+    """Samples per ray: the bound rho L d^2 (j^2 + (1 - j)^2) / (2 S) under NOISE_TOL,
+    within [1, layer.samples]; j = `jitter`, each point's share of its interval (0.5, the
+    midpoint rule, for rays; a frame's pixel has its own). The shader counts the optical
+    depth with the global density (`weight`) inside, and so does this."""
     rho = weight * layer.density
-    need = np.ceil(rho * slope_bound(tex, omega, layer.scale) * d * d / (4.0 * NOISE_TOL))
+    spread = jitter * jitter + (1.0 - jitter) * (1.0 - jitter)
+    need = np.ceil(rho * slope_bound(tex, omega, layer.scale) * d * d * spread / (2.0 * NOISE_TOL))
     return np.clip(need, 1, layer.samples)
 
 
-def optical_depth(layer, O, omega, d, t, env):
+def optical_depth(layer, O, omega, d, t, env, jitter=0.5):
     if layer.mode == "volume":
-        # the midpoint rule with the sample count the shader picks for each ray
-        n = volume_samples(layer, env.tex, omega, d, env.weight)
+        # the shader's quadrature: its sample count for each ray, each point at the share
+        # `jitter` of its interval (0.5 for rays: the midpoint rule)
+        jitter = np.broadcast_to(np.asarray(jitter, dtype=np.float64), d.shape)
+        n = volume_samples(layer, env.tex, omega, d, env.weight, jitter)
         tau = np.zeros(len(d))
         for i in range(int(n.max(initial=1))):
-            x = O + omega * (d * (i + 0.5) / n)[:, None]
+            x = O + omega * (d * (i + jitter) / n)[:, None]
             tau += np.where(i < n, density(layer, x, t, env), 0.0)
         return env.weight * tau * d / n
     P = O + omega * d[:, None]
@@ -77,7 +82,7 @@ def pack(layer, p):
 def code(r, variant):
     if variant == ("volume",):
         return r.format("tau += noiseVolumeOpticalDepth(uNoise, Os, w, ds, {density}, {inv_scale}, "
-                        "{offset}, {steps}, int({samples}));")
+                        "{offset}, {steps}, int({samples}), gSampleJitter);")
     return r.format("tau += noiseSurfaceOpticalDepth(uNoise, Os, P, ds, {density}, {inv_scale}, "
                     "{offset}, {falloff} > 0.5, {inv_falloff_scale});")
 

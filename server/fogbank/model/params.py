@@ -81,6 +81,9 @@ class Effects(Strict):
                              "meaning, for skies), 'fog' hides them in the fog colour (Biri 2002, 4.2)")
     max_opacity: float = num(1.0, 0, 1, 0.01, "", "fog never hides more than this")
     sky_distance: float = num(800.0, 1, 100000, 10, "m", "how far a sky pixel's ray runs")
+    sky_affect: float = num(1.0, 0, 1, 0.01, "", "how much of its fog the sky shows (Godot's sky "
+                            "affect): 1 = all of it, 0 = an unfogged sky; its T becomes "
+                            "1 - sky_affect (1 - T)")
     scatter: float = num(0.6, 0, 10, 0.05, "", "sun in-scattering strength (Gawron 3.2)")
     scatter_exponent: float = num(8.0, 0.1, 256, 0.5, "", "in-scattering falloff")
     scatter_color: Color = Field("#ffffff", description="Gawron's ScatterColor, as a tint of the "

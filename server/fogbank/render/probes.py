@@ -7,24 +7,26 @@ import time
 
 import numpy as np
 
-from fogbank.render.passes import FogPass, ParticlesPass, ResolvePass, ScenePass, ShadowPass, SkyPass
+from fogbank.render.passes import (FogFilterPass, FogPass, ParticlesPass, ResolvePass, ScenePass,
+                                   ShadowPass, SkyPass)
 
 
-def fog_only(r, still, raymarch_steps: int | None = None, read: bool = True):
+def fog_only(r, still, raymarch_steps: int | None = None, read: bool = True, filtered: bool = False):
     """The scene passes (cached, slot "bench") and the fog pass (with the particle quads)
     alone: milliseconds, and with `read` the raw transmittance and inverse distance per
     fog texel, bottom row first, and the view. With raymarch_steps, the exponential
     layers are raymarched instead of integrated in closed form. The time covers the GL
     work of the fog and particle passes (uploads included), not the fog plan's CPU work
-    (packing, particle simulation), which runs on the preparation thread before it."""
-    ms, f = _fog_frame(r, still, raymarch_steps)
+    (packing, particle simulation), which runs on the preparation thread before it. With
+    `filtered`, the jittered fog's filter pass runs between them, as in a frame."""
+    ms, f = _fog_frame(r, still, raymarch_steps, filtered)
     if not read:
         return ms
     a = fog_texels(f)
     return ms, a[..., 0].copy(), a[..., 1].copy(), f.view
 
 
-def _fog_frame(r, still, raymarch_steps: int | None = None):
+def _fog_frame(r, still, raymarch_steps: int | None = None, filtered: bool = False):
     """(milliseconds of the fog and particle passes, the frame) after the cached scene
     passes, slot "bench"."""
     f = r.begin(still, slot="bench", msaa=True)
@@ -34,7 +36,7 @@ def _fog_frame(r, still, raymarch_steps: int | None = None):
     f.fog_plan()
     r.ctx.finish()
     t0 = time.perf_counter()
-    for p in (FogPass(), ParticlesPass()):
+    for p in (FogPass(), *([FogFilterPass()] if filtered else []), ParticlesPass()):
         p.run(r, f)
     r.ctx.finish()
     return (time.perf_counter() - t0) * 1000.0, f
@@ -47,6 +49,6 @@ def fog_texels(f) -> np.ndarray:
     return np.frombuffer(tex.read(), np.float32).reshape(tex.height, tex.width, tex.components)
 
 
-def fog_target(r, still) -> np.ndarray:
+def fog_target(r, still, filtered: bool = False) -> np.ndarray:
     """fog_only's passes, then the whole fog target (fog_texels)."""
-    return fog_texels(_fog_frame(r, still)[1])
+    return fog_texels(_fog_frame(r, still, filtered=filtered)[1])

@@ -31,7 +31,7 @@ class Targets:
     size: tuple[int, int]
     out: moderngl.Framebuffer
     msaa_fbos: dict[bool, moderngl.Framebuffer] = field(default_factory=dict)   # by sunlight
-    fog: dict[int, tuple[moderngl.Framebuffer, moderngl.Texture]] = field(default_factory=dict)
+    fog: dict[tuple[int, int], tuple[moderngl.Framebuffer, moderngl.Texture]] = field(default_factory=dict)
     linear: list[tuple[moderngl.Framebuffer, moderngl.Texture]] = field(default_factory=list)
 
     def nbytes(self) -> int:
@@ -39,7 +39,7 @@ class Targets:
         n = w * h * OUT_BPP
         for sun in self.msaa_fbos:
             n += w * h * (MSAA_BPP + (MSAA_SAMPLES * SUNLIGHT_BPP if sun else 0))
-        for scale in self.fog:
+        for scale, _ in self.fog:
             n += -(-w // scale) * -(-h // scale) * FOG_BPP
         n += len(self.linear) * w * h * 8
         return n
@@ -68,15 +68,15 @@ class Targets:
                 color_attachments=colors, depth_attachment=ctx.depth_renderbuffer(size, samples=MSAA_SAMPLES))
         return self.msaa_fbos[sunlight]
 
-    def fog_target(self, scale: int):
+    def fog_target(self, scale: int, index: int = 0):
         """(framebuffer, texture) of (raw T, 1/distance, T toward the sun, lit share of the
-        view ray) at 1/scale of the frame."""
-        if scale not in self.fog:
+        view ray) at 1/scale of the frame; index 1 is the filter pass's output."""
+        if (scale, index) not in self.fog:
             w, h = self.size
             tex = self.ctx.texture((-(-w // scale), -(-h // scale)), 4, dtype="f4")
             tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
-            self.fog[scale] = (self.ctx.framebuffer(color_attachments=[tex]), tex)
-        return self.fog[scale]
+            self.fog[scale, index] = (self.ctx.framebuffer(color_attachments=[tex]), tex)
+        return self.fog[scale, index]
 
     def linear_pair(self):
         """Two RGBA16F targets for the separate blur passes."""

@@ -25,6 +25,7 @@ COMPOSITE_S_PER_MPX = 0.05
 BLUR_S_PER_MPX = 0.25              # the fused blur: 25 mip taps with depth weights, and the pyramid
 SUNLIGHT_S_PER_MPX = 0.08          # sun_through_fog's G-buffer attachment (~50 ms at 1280x720)
 SHAFTS_S_PER_FOG_MPX = 0.08        # 16 shadow-map samples per fog texel (~45 ms at 1280x720)
+JITTER_FILTER_S_PER_FOG_MPX = 0.035   # the 3x3 filter of a jittered fog target (~32 ms at 1280x720, fog_scale 1)
 ENCODE_S_PER_MPX = {"jpg": 0.01, "png": 0.04, "webp": 0.08}
 # the fog pass's cost per layer comes from each kind (kinds/<name>.py: seconds_per_mpx,
 # extra_seconds), per megapixel of fog target
@@ -92,6 +93,9 @@ def estimate(still: StillParams, msaa: bool = True, fmt: str = "jpg", scale: flo
             _layer_seconds(layer, fog_mpx) for layer in still.layers if layer.enabled)
     if e.shafts > 0:
         parts["effects.shafts"] = SHAFTS_S_PER_FOG_MPX * fog_mpx
+    jittered = e.shafts > 0 or any(l.enabled and l.kind == "noise" and l.mode == "volume" for l in still.layers)
+    if jittered:   # passes/fog_filter.py
+        parts["the filter of jittered samples (volume noise, shafts)"] = JITTER_FILTER_S_PER_FOG_MPX * fog_mpx
     n = still.noise
     if uses_noise(still) and (n.size, n.octaves, n.blur, n.seed) != DEFAULT_BAKE:
         parts[f"noise.size = {n.size} (baking the noise tile, once per worker)"] = bake_seconds(n)
@@ -100,7 +104,7 @@ def estimate(still: StillParams, msaa: bool = True, fmt: str = "jpg", scale: flo
         # toward the sun, the layers' code is inlined a second time
         parts[f"compiling the fog program for {len(key)} layers (once per worker)"] = \
             jit_seconds(key) * (2 if e.sun_through_fog else 1)
-    memory = px * (OUT_BPP + GBUFFER_BPP + 3 + 4) + int(fog_mpx * 1e6) * FOG_BPP
+    memory = px * (OUT_BPP + GBUFFER_BPP + 3 + 4) + int(fog_mpx * 1e6) * FOG_BPP * (2 if jittered else 1)
     if msaa:
         memory += px * MSAA_BPP
     if e.sun_through_fog:   # the direct sunlight: near and far surface in the G-buffer, and the MSAA target

@@ -6,6 +6,7 @@ frame's inputs are the look, the view and the fog plan (render/frame.py).
     scene      meshes, shadow_map, view      -> scene_target
     resolve    scene_target                  -> gbuffer (near and far surface per pixel)
     fog        gbuffer.invdist, fog_plan     -> fog
+    fog_filter fog, fog_plan                 -> fog (3x3, jittered looks only)
     particles  gbuffer.invdist, fog_plan     -> fog (clarity multiplied in)
     composite  gbuffer, fog                  -> out (or linear, blur separate)
     blur       linear                        -> out
@@ -18,6 +19,7 @@ from fogbank.render.passes.base import FRAME_INPUTS, Pass
 from fogbank.render.passes.blur import BlurPass
 from fogbank.render.passes.composite import CompositePass
 from fogbank.render.passes.fog import FogPass
+from fogbank.render.passes.fog_filter import FogFilterPass
 from fogbank.render.passes.output import OutputPass
 from fogbank.render.passes.particles import ParticlesPass
 from fogbank.render.passes.resolve import ResolvePass
@@ -26,8 +28,9 @@ from fogbank.render.passes.shadow import ShadowPass
 from fogbank.render.passes.sky import SkyPass
 
 FRAME_PASSES: tuple[Pass, ...] = (
-    ShadowPass(), SkyPass(), ScenePass(), ResolvePass(), FogPass(), ParticlesPass(), CompositePass(),
+    ShadowPass(), SkyPass(), ScenePass(), ResolvePass(), FogPass(), FogFilterPass(), ParticlesPass(), CompositePass(),
     BlurPass(), OutputPass(),
 )
 
-__all__ = ["FRAME_INPUTS", "FRAME_PASSES", "Pass"]
+__all__ = ["FRAME_INPUTS", "FRAME_PASSES", "BlurPass", "CompositePass", "FogFilterPass", "FogPass",
+           "OutputPass", "ParticlesPass", "Pass", "ResolvePass", "ScenePass", "ShadowPass", "SkyPass"]

@@ -47,7 +47,7 @@ class CompositePass(Pass):
                 "uFogColor": np.array(srgb_to_linear(look.fog_color)),
                 "uSunDir": look.sun.direction(),
                 "uScatterColor": sun_color(look) * np.array(srgb_to_linear(e.scatter_color)) * e.scatter,
-                "uScatterStart": e.scatter_start, "uSkyDistance": e.sky_distance,
+                "uScatterStart": e.scatter_start, "uSkyDistance": e.sky_distance, "uSkyAffect": e.sky_affect,
                 "uScatterExponent": e.scatter_exponent, "uBlurSigma": blur_sigma(f),
                 "uPhaseHG": e.phase == "henyey-greenstein", "uAnisotropy": e.anisotropy,
                 "uShafts": e.shafts,

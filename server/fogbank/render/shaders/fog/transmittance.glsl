@@ -4,6 +4,12 @@
 // uLayer holds LAYER_VEC4 vec4 per layer, packed by kinds/packing.py from each kind's
 // declared slots, which also writes the per-layer calls (fog/layers.gen.glsl).
 #include "common/math.glsl"
+
+// Where a sampled quadrature (volume noise) puts each point within its interval, as a
+// share of it: 0.5, the midpoint rule, for the transmittance API's rays; the fog pass
+// sets each pixel's own (deterministic: a URL renders the same pixels).
+float gSampleJitter = 0.5;
+
 // every registered kind's GLSL file (generated from the registry, kinds/__init__.py)
 #include "fog/kinds.gen.glsl"
 #include "fog/finish.glsl"

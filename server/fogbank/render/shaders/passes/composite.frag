@@ -31,6 +31,7 @@ uniform float uScatterStart;      // m, Gawron's ScatterStartDist (eq. 5); 0 = t
 uniform bool uPhaseHG;            // the lobe: Henyey-Greenstein (true) or Gawron's power
 uniform float uAnisotropy;        // Henyey-Greenstein g
 uniform float uSkyDistance;       // m, how far a sky pixel's ray runs
+uniform float uSkyAffect;         // the share of its fog a sky pixel shows (Godot's sky affect)
 uniform float uBlurSigma;         // px at full fog
 uniform float uBlurExponent;
 layout(location = 0) out vec4 fColor;
@@ -132,6 +133,7 @@ vec3 fogTAround(ivec2 px, float invd) {
 vec4 fogged(ivec2 px, vec3 scene, vec3 sunlight, float invd, vec3 w, vec2 full, bool far) {
     vec3 Ts = far ? fogTAround(px, invd) : fogT(px, invd);
     float T = fogFinish(Ts.x);
+    if (invd <= 0.0) T = 1.0 - uSkyAffect * (1.0 - T);   // the sky: only its share of the fog
     float sunLoss = 1.0 - Ts.y;   // the share of the direct sunlight the fog takes away
     // Gawron eqs. 5-8: p_s = (WorldPos - CameraPos) + ScatterStartDist, the scalar added to
     // each component as in the paper's Listing 1; F = max(0, p_s/|p_s| . L)^exponent;

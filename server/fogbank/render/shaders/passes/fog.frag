@@ -48,6 +48,9 @@ float litShare(vec3 w, float d, vec2 px) {
 
 void main() {
     FogTexel ft = fogTexel(gl_FragCoord.xy, uInvDist, uFwd, uRight, uUp);
+    // volume noise's points, jittered per pixel (fog/transmittance.glsl); shifted from the
+    // shafts' pixel so the two patterns do not line up
+    gSampleJitter = interleavedGradientNoise(floor(gl_FragCoord.xy) + vec2(7.0, 13.0));
     float d = ft.invd > 0.0 ? 1.0 / ft.invd : uSkyDistance;
     float sunT = 1.0;
 #ifdef SUN_THROUGH_FOG
