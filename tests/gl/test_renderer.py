@@ -601,6 +601,28 @@ def test_single_pass_blur_has_no_ghosts(renderer):
     assert runs == 1
 
 
+def supersampled_ground(still):
+    """Per pixel (bottom row first, raveled): the mean of 4x4 sub-pixel rays' exact T
+    (float64 reference, rays cast by hand against the calibration scene), whether all of
+    them meet the ground, and their mean distance."""
+    eye = np.asarray(still.camera.position, dtype=np.float64)
+    h, w_ = still.height, still.width
+    py, px = np.mgrid[0:h, 0:w_]
+    acc = np.zeros(h * w_)
+    ground = np.ones(h * w_, bool)
+    dist = np.zeros(h * w_)
+    for sy in range(4):
+        for sx in range(4):
+            w = hand_rays(still.camera, px.ravel() + (sx + 0.5) / 4 - 0.5, py.ravel() + (sy + 0.5) / 4 - 0.5,
+                          w_, h)
+            d, obj = _cast(eye, w)
+            ground &= obj == 0
+            d = np.where(obj == 0, d, 1.0)
+            acc += reference(still.fog(), np.broadcast_to(eye, w.shape), w, d, still.time)
+            dist += d / 16
+    return acc / 16, ground, dist
+
+
 def test_distant_noise_is_filtered_toward_the_supersampled_picture(renderer):
     """A fine noise (4 m tiles) on the calibration ground, surface mode: each fog texel's T
     against the mean of 4x4 sub-pixel rays' exact T (float64 reference, rays cast by hand
@@ -616,21 +638,7 @@ def test_distant_noise_is_filtered_toward_the_supersampled_picture(renderer):
     still = StillParams.model_validate(look)
     from fogbank.render.probes import fog_only
     _, T, _, _ = fog_only(renderer, still)          # bottom row first
-    eye = np.asarray(still.camera.position, dtype=np.float64)
-    py, px = np.mgrid[0:180, 0:320]
-    acc = np.zeros(180 * 320)
-    ground = np.ones(180 * 320, bool)
-    dist = np.zeros(180 * 320)
-    for sy in range(4):
-        for sx in range(4):
-            w = hand_rays(still.camera, px.ravel() + (sx + 0.5) / 4 - 0.5, py.ravel() + (sy + 0.5) / 4 - 0.5,
-                          320, 180)
-            d, obj = _cast(eye, w)
-            ground &= obj == 0
-            d = np.where(obj == 0, d, 1.0)
-            acc += reference(still.fog(), np.broadcast_to(eye, w.shape), w, d, 0.0)
-            dist += d / 16
-    want = acc / 16
+    want, ground, dist = supersampled_ground(still)
     got = T.ravel().astype(np.float64)
     for lo, hi, bound in ((20.0, 50.0, 0.015), (100.0, 400.0, 0.045)):
         band = ground & (dist > lo) & (dist < hi)
@@ -769,21 +777,7 @@ def test_fine_cosine_waves_do_not_alias_into_stripes(renderer):
     still = StillParams.model_validate(look)
     from fogbank.render.probes import fog_only
     _, T, _, _ = fog_only(renderer, still)          # bottom row first
-    eye = np.asarray(still.camera.position, dtype=np.float64)
-    py, px = np.mgrid[0:180, 0:320]
-    acc = np.zeros(180 * 320)
-    ground = np.ones(180 * 320, bool)
-    dist = np.zeros(180 * 320)
-    for sy in range(4):
-        for sx in range(4):
-            w = hand_rays(still.camera, px.ravel() + (sx + 0.5) / 4 - 0.5, py.ravel() + (sy + 0.5) / 4 - 0.5,
-                          320, 180)
-            d, obj = _cast(eye, w)
-            ground &= obj == 0
-            d = np.where(obj == 0, d, 1.0)
-            acc += reference(still.fog(), np.broadcast_to(eye, w.shape), w, d, 0.0)
-            dist += d / 16
-    want = acc / 16
+    want, ground, dist = supersampled_ground(still)
     got = T.ravel().astype(np.float64)
     assert float(np.ptp(want[ground])) > 0.3     # the fog varies: the check has teeth
     for lo, hi in ((20.0, 60.0), (60.0, 400.0)):
