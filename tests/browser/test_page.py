@@ -397,3 +397,90 @@ def test_the_store_is_the_one_source_of_the_pages_state(server, browser):
     assert re.findall(r"^(?:let|var)\s+\w+", app, re.M) == []
     assert page.errors == []
     page.context.close()
+
+
+def _panel_and_state(page):
+    """(what the panel shows, what it should show for the look on screen) by data-path."""
+    params = page.evaluate("window.fogbank.store.get().params")
+    panel = page.evaluate(PANEL)
+    shown = {path: _read(kind, raw) for path, kind, raw in panel}
+    expected = {path: _shown(kind, _at(params, path)) for path, kind, _ in panel}
+    return shown, expected
+
+
+def test_the_panel_follows_the_look_through_drags_edits_presets_and_pauses(server, browser):
+    """Issue 12, finding 1: the camera fields follow a drag; editing one camera field keeps
+    the dragged values of the others; a preset switch while a number field has focus shows
+    the new preset's layers; a pause keeps the preset's name."""
+    page = new_page(browser, server.url + "/?v=1&time=3&play=0")
+    wait_frames(page, 1)
+    wait_quiet(page)
+    page.locator("summary", has_text="camera").first.click()   # open the camera group
+    start = page.evaluate("window.fogbank.store.get().confirmed.params.camera")
+    # 1. a drag: the camera fields follow it
+    box = page.locator("#view").bounding_box()
+    x, y = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
+    page.mouse.move(x, y)
+    page.mouse.down()
+    for i in range(1, 11):
+        page.mouse.move(x - 12 * i, y + 3 * i)
+        time.sleep(0.03)
+    page.mouse.up()
+    wait_quiet(page)
+    dragged = page.evaluate("window.fogbank.store.get().confirmed.params.camera")
+    assert dragged["yaw"] != start["yaw"] and dragged["pitch"] != start["pitch"]
+    shown, expected = _panel_and_state(page)
+    assert shown["camera.yaw"] == dragged["yaw"]
+    assert shown == expected
+    # 2. one position field typed: the others keep the dragged camera
+    page.locator("[data-path='camera.position.0']").fill("12.5")
+    page.locator("[data-path='camera.position.0']").press("Enter")
+    page.wait_for_function("window.fogbank.store.get().confirmed.params.camera.position[0] === 12.5")
+    cam = page.evaluate("window.fogbank.store.get().confirmed.params.camera")
+    assert cam["position"][1:] == dragged["position"][1:]
+    assert (cam["yaw"], cam["pitch"], cam["fov"]) == (dragged["yaw"], dragged["pitch"], dragged["fov"])
+    # 3. a preset switch while a number field has focus: the new preset's layers
+    page.locator("[data-path='density']").click()
+    page.select_option("#preset", "quilez-spheres")
+    page.wait_for_function("window.fogbank.store.get().confirmed.params.layers.length === 3")
+    page.wait_for_selector("[data-path='layers.2.radius']", state="attached")   # a preset plays on
+    shown, expected = _panel_and_state(page)
+    assert shown == expected
+    # 4. a pause: the paused time goes into the link, and the preset keeps its name
+    assert page.evaluate("window.fogbank.store.get().confirmed.playing") is True
+    wait_frames(page, page.evaluate("window.fogbank.store.get().frames") + 3)
+    page.locator("#play").click()
+    page.wait_for_function("window.fogbank.store.get().confirmed.playing === false")
+    assert "time=" in page.evaluate("window.fogbank.store.get().confirmed.query")
+    assert page.locator("#preset").input_value() == "quilez-spheres"
+    shown, expected = _panel_and_state(page)
+    assert shown == expected
+    assert page.errors == []
+    page.context.close()
+
+
+def test_a_link_with_bad_parts_keeps_the_rest_and_says_what_was_left_out(server, browser):
+    """Issue 12, finding 5: a bad key or value used to reset the whole look, rewrite the
+    address bar and say so for 4 s. Now the rest of the look is shown, a notice that stays
+    names each part left out, and the link as given can still be copied."""
+    given = server.url + "/?v=1&camera.yaw=33&density=abc&bogus=1&preset=biri-fig7"
+    page = new_page(browser, given)
+    wait_frames(page, 1)
+    page.wait_for_selector("#notice:not([hidden])")
+    confirmed = page.evaluate("window.fogbank.store.get().confirmed")
+    assert confirmed["params"]["camera"]["yaw"] == 33
+    assert page.locator("#preset").input_value() == ""          # biri-fig7, turned: a custom look
+    from fogbank.model.presets import preset_dict
+    fig7 = preset_dict("biri-fig7")
+    assert [l["kind"] for l in confirmed["params"]["layers"]] == [l["kind"] for l in fig7["layers"]]
+    assert "camera.yaw=33" in confirmed["query"] and "bogus" not in confirmed["query"]
+    text = page.locator("#notice-text").inner_text()
+    assert "density" in text and "bogus" in text
+    time.sleep(5)
+    assert page.locator("#notice").is_visible()                 # it stays until dismissed
+    page.locator("#copy-original").click()
+    assert page.evaluate("navigator.clipboard.readText()") == given
+    page.locator("#notice-close").click()
+    assert not page.locator("#notice").is_visible()
+    assert page.errors == []
+    page.context.close()

@@ -88,8 +88,14 @@ def test_bad_params_keep_the_last_valid_look():
     assert out[0]["type"] == "error"
     assert out[0]["detail"][0]["loc"][:3] == ["params", "layers", 0]
     assert s.fog == before and s.version == v
-    out = s.apply(msg('{"type": "query", "query": "camera.yaw=abc"}'), 0.0)
-    assert out[0]["type"] == "error" and s.fog == before
+    out = s.apply(msg('{"type": "query", "query": "v=1&camera.yaw=abc&camera.pitch=-7&layers.9.density=1"}'), 0.0)
+    # a link keeps its good parts; the error names the parts left out
+    assert [m["type"] for m in out] == ["state", "error"]
+    assert out[1]["kept"] is True
+    assert sorted(d["loc"][1] for d in out[1]["detail"]) == ["camera.yaw", "layers.9.density"]
+    assert s.fog.camera.pitch == -7 and s.fog.camera.yaw == before.camera.yaw
+    out = s.apply(msg('{"type": "query", "query": "v=1&camera.yaw=1&camera.yaw=2&=&&"}'), 0.0)
+    assert out[0]["type"] == "error"                     # nothing readable: the look stays
 
 
 def test_query_sets_the_look():

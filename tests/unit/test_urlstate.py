@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 from draws import ALL, random_layer
 from fogbank.model import presets as P
 from fogbank.model.params import FogParams, StillParams
-from fogbank.model.urlstate import URLError, canonical, decode, encode
+from fogbank.model.urlstate import URLError, canonical, decode, decode_lenient, encode
 
 finite = st.floats(allow_nan=False, allow_infinity=False, width=64)
 
@@ -124,3 +124,33 @@ def test_url_numbers_are_ascii_only(text):
     with pytest.raises(ValidationError) as exc:
         StillParams.model_validate(value)
     assert exc.value.errors()[0]["loc"] == ("width",)
+
+
+BAD_PARTS = [("bogus.key", "1"), ("density", "abc"), ("density", "99"), ("camera.fov", "500"),
+             ("layers.40.density", "1"), ("fog_color", "nope"), ("camera.position", "1e12,0,0")]
+
+
+@settings(max_examples=120, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(looks(), st.sampled_from(BAD_PARTS))
+def test_a_bad_part_of_a_link_keeps_the_rest(still, bad):
+    """A link with one bad key or value gives the look of the link without it, and one
+    error that names that key (issue 12: a bad part used to reset the whole look)."""
+    key, value = bad
+    good = "&".join(p for p in encode(still).split("&") if not p.startswith(key + "="))
+    got, errs = decode_lenient(f"{good}&{key}={value}", StillParams)
+    assert got == StillParams.model_validate(decode(good, StillParams)[0])
+    assert [e["loc"] for e in errs] == [["query", key]]
+
+
+def test_an_unknown_preset_or_version_keeps_the_rest_of_the_link():
+    got, errs = decode_lenient("v=2&preset=nope&camera.yaw=33&density=2")
+    assert (got.camera.yaw, got.density) == (33, 2)
+    assert got.layers == FogParams.model_validate(P.preset_dict("default")).layers
+    assert [e["loc"] for e in errs] == [["query", "v"], ["query", "preset"]]
+    assert "default" in errs[1]["msg"] and "biri-fig6" in errs[1]["msg"]
+
+
+@pytest.mark.parametrize("q", ["x" * 20000, "a=1&&=&b"])
+def test_an_unreadable_link_is_refused_whole(q):
+    with pytest.raises(URLError):
+        decode_lenient(q)

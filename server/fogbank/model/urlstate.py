@@ -23,7 +23,7 @@ import re
 from typing import Annotated, Any, Literal, Union, get_args, get_origin
 from urllib.parse import parse_qsl, quote
 
-from pydantic import BaseModel
+from pydantic import BaseModel, ValidationError
 
 from fogbank.model import presets as P
 from fogbank.model.errors import error, summary
@@ -225,6 +225,71 @@ def decode(query: str, cls: type[FogParams] = FogParams) -> tuple[dict, str]:
     if errors:
         raise URLError(errors)
     return value, base
+
+
+def decode_lenient(query: str, cls: type[FogParams] = FogParams) -> tuple[FogParams, list[dict[str, Any]]]:
+    """The look of a query with its bad parts left out: (the params, one error per part
+    left out). A link with one bad key or value keeps the rest of its look: an unknown
+    preset falls back to "default", an unknown URL version is read as this one, and each
+    field that does not parse or validate is dropped (with the fields under it). Raises
+    URLError only when nothing can be read: an over-long or malformed query, or an error
+    that no single field of the query caused."""
+    if len(query) > MAX_QUERY:
+        raise URLError([error(["query"], f"query longer than {MAX_QUERY} characters", "url_too_long")])
+    try:
+        pairs = parse_qsl(query, keep_blank_values=True, strict_parsing=bool(query), max_num_fields=1000)
+    except ValueError as exc:
+        raise URLError([error(["query"], f"malformed query string: {exc}", "url_malformed")]) from None
+    errors: list[dict[str, Any]] = []
+    fields: dict[str, str] = {}
+    for k, v in pairs:
+        if k in fields:
+            _err(errors, k, "given more than once; the last is used", "url_duplicate")
+        fields[k] = v
+    for key in VIEW_KEYS:
+        fields.pop(key, None)
+    version = fields.pop("v", str(VERSION))
+    if version != str(VERSION):
+        _err(errors, "v", f"unknown URL version {version!r}; read as version {VERSION}", "url_version")
+    base = fields.pop("preset", "default")
+    if base not in P.presets():
+        _err(errors, "preset", f"unknown preset {base!r}; one of {', '.join(P.presets())}; "
+             "the rest is applied to 'default'", "url_preset")
+        base = "default"
+    for _ in range(16):   # each round drops at least one field
+        value: dict = P.preset_dict(base)
+        if cls is StillParams:
+            value = {**value, "width": StillParams.model_fields["width"].default,
+                     "height": StillParams.model_fields["height"].default}
+        bad: list[dict[str, Any]] = []
+        for key in sorted(fields, key=lambda k: (k.count("."), not k.endswith(".kind"), k)):
+            _set(cls, value, key, fields[key], bad)
+        for e in bad:
+            fields.pop(e["loc"][1], None)
+        errors += bad
+        try:
+            return cls.model_validate(value), errors
+        except ValidationError as exc:
+            dropped = False
+            for e in exc.errors(include_url=False):
+                # a layer's loc names its kind after the index (the union's tag): not a key
+                loc = [x for i, x in enumerate(e["loc"])
+                       if not (i and isinstance(e["loc"][i - 1], int) and x in LAYER_CLASSES)]
+                at = ".".join(str(x) for x in loc)
+                # the field itself and those under it; else the nearest field above it
+                # (a vector given whole: camera.position for camera.position.0)
+                keys = [k for k in fields if at and (k == at or k.startswith(at + "."))]
+                if not keys:
+                    keys = sorted((k for k in fields if at.startswith(k + ".")), key=len)[-1:]
+                if not keys:
+                    raise URLError([error(["query", at], e["msg"], e["type"])]) from None
+                for k in keys:
+                    _err(errors, k, e["msg"], e["type"])
+                    fields.pop(k)
+                    dropped = True
+            if not dropped:
+                break
+    raise URLError(errors)
 
 
 def _err(errors, key, msg, kind="url_field"):

@@ -91,7 +91,17 @@ stream.addEventListener("state", (e) => {
     store.set({ redrawNext: false });
   }
 });
+// the panel shows the look on screen: every change of it (a drag, an edit, a confirmed
+// state) sets the controls in place, and rebuilds the form when its shape changed
+store.subscribe((s, prev) => {
+  if (s.params && s.params !== prev.params && !s.redrawNext) controls.sync(s.params);
+});
 stream.addEventListener("error", (e) => {
+  if (e.detail.kept) {   // a link with bad parts: the rest of its look is shown
+    notice(`This link had parts that could not be used, so they were left out: ${e.detail.msg}. ` +
+      "The rest of its look is shown.");
+    return;
+  }
   toast(e.detail.msg || "error");
   store.set({ redrawNext: true });   // the server kept its last valid look: show it again
   stream.send({ type: "params", params: {} });
@@ -133,9 +143,14 @@ function showConfirmed(c) {
   $("play").textContent = c.playing ? "Pause" : "Play";
   $("play").setAttribute("aria-pressed", String(c.playing));
   $("speed").value = String(c.speed);
-  const look = c.query.replace(/&(play|speed)=[^&]*/g, "");
-  const match = presets.find((p) => p.query === look);
+  // a preset paused, sped up or at another time is still that preset
+  const match = presets.find((p) => lookOf(p.query) === lookOf(c.query));
   $("preset").value = match ? match.name : "";
+}
+
+// a query without the keys that say where the animation is, not what it shows
+function lookOf(query) {
+  return query.split("&").filter((kv) => !/^(play|speed|time)=/.test(kv)).join("&");
 }
 
 // the time slider (unless it is being dragged) and the canvas's data-* follow the frames
@@ -209,6 +224,21 @@ function sendView() {
 }
 
 // ------------------------------------------------------------------ overlay
+// the link the page was opened with, before the address bar follows the look
+const givenLink = location.href;
+function notice(text) {
+  $("notice-text").textContent = text;
+  $("notice").hidden = false;
+}
+$("notice-close").addEventListener("click", () => { $("notice").hidden = true; });
+$("copy-original").addEventListener("click", async () => {
+  try {
+    await navigator.clipboard.writeText(givenLink);
+    toast("The link as given was copied");
+  } catch {
+    prompt("The link as given", givenLink);
+  }
+});
 function banner(text) {
   const b = $("banner");
   b.hidden = !text;

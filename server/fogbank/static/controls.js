@@ -1,7 +1,8 @@
 // Controls built from the params' JSON Schema (/api/schema): a slider plus a typed number
 // with its unit for every bounded number, checkboxes, selects for enums, colour pickers,
 // vector fields, and list editors for layers and cosine terms. Every change calls
-// onChange(path, value); the whole form is redrawn from the server's state.
+// onChange(path, value); the form follows the page's state: rebuilt when its shape
+// changes, its controls set in place otherwise (Controls.sync).
 
 const SKIP = new Set(["width", "height", "time"]);   // stills only, or on the toolbar
 let uid = 0;
@@ -229,11 +230,19 @@ export class Controls {
     this.ctx = { openGroups: new Set(["layers.0"]) };
   }
 
+  // Show `value`. The form is rebuilt only when its shape changes (layers or list items
+  // added, removed, reordered or of another kind); otherwise every control is set in
+  // place (sync), so that a control being typed into keeps its text and focus.
   render(value) {
-    // keep the focused control's state across a redraw
+    const next = shapeOf(value);
+    if (next === this.shape) {
+      this.sync(value);
+      return;
+    }
+    this.shape = next;
+    // keep the focused control's focus across a rebuild
     const active = document.activeElement;
     const focusPath = active && this.form.contains(active) ? active.dataset.path : null;
-    if (focusPath && active.type === "number" && active.value !== "") return;  // typing
     const top = resolve(this.schema, this.schema);
     this.form.replaceChildren();
     for (const [name, sub] of Object.entries(top.properties)) {
@@ -245,6 +254,44 @@ export class Controls {
     }
     if (focusPath) this.form.querySelector(`[data-path="${CSS.escape(focusPath)}"]`)?.focus();
   }
+
+  // Set every control to `value` in place (a camera dragged, a look confirmed), except the
+  // one that has focus: its text is the user's until they commit it.
+  sync(value) {
+    if (shapeOf(value) !== this.shape) return this.render(value);
+    const active = document.activeElement;
+    for (const e of this.form.querySelectorAll("[data-path]")) {
+      if (e === active) continue;
+      const v = valueAt(value, e.dataset.path);
+      if (v === undefined) continue;
+      if (e.type === "checkbox") {
+        if (e.checked !== !!v) e.checked = !!v;
+        continue;
+      }
+      const text = Array.isArray(v) ? v.join(", ") : String(v);
+      if (e.value !== text) e.value = text;
+      const range = e.parentElement?.querySelector('input[type="range"]');
+      if (range && e.type === "number" && range.value !== text) range.value = text;
+    }
+  }
+}
+
+function valueAt(obj, path) {
+  let v = obj;
+  for (const key of path.split(".")) {
+    if (v == null) return undefined;
+    v = Array.isArray(v) ? v[Number(key)] : v[key];
+  }
+  return v;
+}
+
+// The form's structure for `value`: list lengths and each item's kind, not the numbers.
+function shapeOf(v) {
+  if (Array.isArray(v)) return `[${v.map(shapeOf).join(",")}]`;
+  if (v && typeof v === "object") {
+    return `{${Object.keys(v).map((k) => `${k}:${k === "kind" ? v[k] : shapeOf(v[k])}`).join(",")}}`;
+  }
+  return "";
 }
 
 // Set `value` at `path` inside a copy of `obj` and return the patch that the server

@@ -19,7 +19,7 @@ from fogbank.model import presets as P
 from fogbank.model.params import FogParams, StillParams
 from fogbank.stream.protocol import (AckMsg, CameraMsg, InteractMsg, ParamsMsg, PlayMsg, QueryMsg, SeekMsg,
                        SpeedMsg, ViewMsg)
-from fogbank.model.urlstate import URLError, decode, encode, view_state, view_suffix
+from fogbank.model.urlstate import URLError, decode_lenient, encode, view_state, view_suffix
 
 MAX_IN_FLIGHT = 2
 INPUT_SETTLE_S = 0.25     # after the last input, this long until the full-quality refinement
@@ -96,16 +96,22 @@ class Session:
         message changes nothing."""
         try:
             if isinstance(msg, QueryMsg):
+                # a link with bad parts keeps the rest of its look; the error names the
+                # parts left out ("kept": the look shown is the rest)
                 try:
-                    value, _ = decode(msg.query.lstrip("?"), FogParams)
+                    fog, bad = decode_lenient(msg.query.lstrip("?"), FogParams)
                 except URLError as exc:
                     return [{"type": "error", "detail": exc.errors, "msg": str(exc)}]
-                self._set_fog(FogParams.model_validate(value), now, input_=False)
+                self._set_fog(fog, now, input_=False)
                 view = view_state(msg.query.lstrip("?"))
                 self.playing = view.get("playing", True)
                 self.speed = view.get("speed", 1.0)
                 self._rebase(now, self.fog.time)
-                return [self.state(now)]
+                out = [self.state(now)]
+                if bad:
+                    out.append({"type": "error", "detail": bad, "kept": True,
+                                "msg": "; ".join(errors.summary([e]) for e in bad)})
+                return out
             if isinstance(msg, (ParamsMsg, CameraMsg)):
                 patch = msg.params if isinstance(msg, ParamsMsg) else {"camera": msg.camera}
                 base = None if getattr(msg, "replace", False) else self.fog.model_dump(mode="json")
