@@ -187,11 +187,22 @@ def test_page_reconnects_after_the_server_restarts(browser):
         s.stop()
         page.wait_for_selector("#banner:not([hidden])", timeout=20000)
         assert "reconnecting" in page.locator("#banner").inner_text().lower()
+        # the overlay says nothing it cannot know (its fps went stale before)
+        page.wait_for_function("document.getElementById('stat-fps').textContent === '–'")
+        # an edit made while away is kept (issue 12, finding 8)
+        page.locator("[data-path='density']").fill("1.7")
+        page.locator("[data-path='density']").press("Enter")
+        page.wait_for_function("window.fogbank.store.get().unsent?.density === 1.7")
         before = int(page.evaluate("document.getElementById('view').dataset.frames"))
         s.start()
+        back = time.monotonic()
         page.wait_for_selector("#banner[hidden]", state="attached", timeout=30000)
+        # back within 2 s of the server's return (the retry interval is at most 1 s)
+        assert time.monotonic() - back <= 2.0
         wait_frames(page, before + 3)
         assert "camera.yaw=45" in page.url   # the same look, from the URL
+        page.wait_for_function("window.fogbank.store.get().confirmed.params.density === 1.7")
+        assert page.locator("[data-path='density']").input_value() == "1.7"
         page.context.close()
     finally:
         s.stop()
@@ -484,3 +495,57 @@ def test_a_link_with_bad_parts_keeps_the_rest_and_says_what_was_left_out(server,
     assert not page.locator("#notice").is_visible()
     assert page.errors == []
     page.context.close()
+
+
+@pytest.mark.parametrize("w,h", [(1024, 768), (1280, 800), (1920, 1080), (844, 390)])
+def test_the_toolbar_fits_and_its_export_menu_opens(server, browser, w, h):
+    """Issue 12, finding 6: "Download still" was clipped at 1280 px and off-screen at
+    1024; on a phone only the preset menu showed; the time scrubber was 57 px wide. Every
+    toolbar control lies inside the window at these sizes, the scrubber is wide, and the
+    export menu (stream quality, still size, download) opens inside the window."""
+    ctx = browser.new_context(viewport={"width": w, "height": h}, bypass_csp=True,
+                              **({"is_mobile": True, "has_touch": True} if h < 500 else {}))
+    page = ctx.new_page()
+    page.goto(server.url + "/")
+    wait_frames(page, 1)
+    ids = ["toggle-panel", "preset", "play", "speed", "time", "copy-link"]
+    for i in ids + ["more"]:
+        box = page.locator(f"#{i}").bounding_box()
+        assert box is not None and page.locator(f"#{i}").is_visible()
+        assert box["x"] >= 0 and box["x"] + box["width"] <= w, (i, box)
+    assert page.locator("#time").bounding_box()["width"] >= (120 if w < 900 else 200)
+    page.locator("#more > summary").click()
+    for i in ["stream-size", "still-size", "download"]:
+        box = page.locator(f"#{i}").bounding_box()
+        assert page.locator(f"#{i}").is_visible()
+        assert box["x"] >= 0 and box["x"] + box["width"] <= w and box["y"] + box["height"] <= h, (i, box)
+    SHOTS.mkdir(parents=True, exist_ok=True)
+    page.screenshot(path=str(SHOTS / f"toolbar-{w}x{h}.png"))
+    ctx.close()
+
+
+def test_what_you_share_and_download_is_what_you_see(server, browser):
+    """Issue 12, finding 7: a link copied while playing carried the last seek time, and the
+    download was 16:9 whatever the view. The copied link carries the time on screen, and
+    the still defaults to the view's own shape."""
+    ctx = browser.new_context(viewport={"width": 1000, "height": 900}, bypass_csp=True, accept_downloads=True)
+    ctx.grant_permissions(["clipboard-read", "clipboard-write"], origin=server.url)
+    page = ctx.new_page()
+    page.goto(server.url + "/?v=1&time=3")
+    wait_frames(page, 1)
+    page.wait_for_function("window.fogbank.store.get().lastFrame && window.fogbank.store.get().lastFrame.time > 5")
+    page.locator("#copy-link").click()
+    now = page.evaluate("window.fogbank.store.get().lastFrame.time")
+    link = page.evaluate("navigator.clipboard.readText()")
+    t = float(re.search(r"[?&]time=([0-9.]+)", link).group(1))
+    assert now - 1.0 <= t <= now + 0.01 and t > 5
+    # the still: the view's aspect
+    stage = page.evaluate("[document.getElementById('stage').clientWidth, document.getElementById('stage').clientHeight]")
+    page.locator("#more > summary").click()
+    with page.expect_download() as d:
+        page.locator("#download").click()
+    m = re.search(r"fogbank-(\d+)x(\d+)\.png", d.value.suggested_filename)
+    w, h = int(m.group(1)), int(m.group(2))
+    assert max(w, h) == 1920
+    assert abs(w / h - stage[0] / stage[1]) <= 0.01
+    ctx.close()

@@ -39,8 +39,13 @@ function queueFlush() {
   requestAnimationFrame(() => {
     const { pendingParams, pendingCamera } = store.get();
     store.set({ flushQueued: false, pendingParams: null, pendingCamera: null });
-    if (pendingParams) stream.send({ type: "params", params: pendingParams });
-    if (pendingCamera) stream.send({ type: "camera", camera: pendingCamera });
+    const unsent = {};
+    if (pendingParams && !stream.send({ type: "params", params: pendingParams })) Object.assign(unsent, pendingParams);
+    if (pendingCamera && !stream.send({ type: "camera", camera: pendingCamera })) {
+      unsent.camera = merge(unsent.camera || {}, pendingCamera);
+    }
+    // disconnected: kept, and sent when the connection is back
+    if (Object.keys(unsent).length) store.update((s) => ({ unsent: merge(s.unsent || {}, unsent) }));
   });
 }
 
@@ -82,8 +87,9 @@ stream.addEventListener("state", (e) => {
   const { type, ...confirmed } = e.detail;
   store.update((s) => ({
     confirmed,
-    // keep the camera being dragged
-    params: s.interacting && s.params ? { ...confirmed.params, camera: s.params.camera } : confirmed.params,
+    // keep the camera being dragged, and edits not yet sent
+    params: merge(s.interacting && s.params ? { ...confirmed.params, camera: s.params.camera } : confirmed.params,
+      s.unsent || {}),
   }));
   const s = store.get();
   if (s.redrawNext) {
@@ -126,8 +132,10 @@ stream.addEventListener("close", (e) => {
 });
 stream.addEventListener("open", () => {
   banner(null);
-  store.set({ redrawNext: true });
+  const { unsent } = store.get();
+  store.set({ redrawNext: true, unsent: null });
   sendView();
+  if (unsent) stream.send({ type: "params", params: unsent });   // the edits made while away
 });
 
 // ------------------------------------------------------------------ views of the state
@@ -185,16 +193,39 @@ $("time").addEventListener("input", () => {
   stream.send({ type: "seek", time: Number($("time").value) });
 });
 $("time").addEventListener("change", () => { store.set({ scrubbing: false }); });
+// The link to share: the look, at the time on screen now (while playing, the address
+// bar's time is that of the last seek or pause).
+function shareLink() {
+  const q = new URLSearchParams(location.search);
+  if (playing(store.get()) && store.get().lastFrame) q.set("time", String(Math.round(simTime(store.get()) * 1000) / 1000));
+  const text = q.toString().replace(/%2C/g, ",");
+  return `${location.origin}${location.pathname}${text ? `?${text}` : ""}`;
+}
 $("copy-link").addEventListener("click", async () => {
+  const link = shareLink();
   try {
-    await navigator.clipboard.writeText(location.href);
+    await navigator.clipboard.writeText(link);
     toast("Link copied");
   } catch {
-    prompt("Copy this link", location.href);
+    prompt("Copy this link", link);
   }
 });
+// the still's size: the view's own shape by default (1920 px on its long side), or a preset size
+function stillSize() {
+  const v = $("still-size").value;
+  if (v !== "view") return v.split("x").map(Number);
+  const stage = $("stage");
+  const aspect = Math.max(0.25, Math.min(4, stage.clientWidth / Math.max(1, stage.clientHeight)));
+  return aspect >= 1 ? [1920, Math.round(1920 / aspect / 2) * 2] : [Math.round(1920 * aspect / 2) * 2, 1920];
+}
+function showViewSize() {
+  const opt = $("still-size").querySelector('option[value="view"]');
+  const [w, h] = stillSize();
+  opt.textContent = $("still-size").value === "view" ? `as the view, ${w}×${h}` : "as the view";
+}
+$("still-size").addEventListener("change", showViewSize);
 $("download").addEventListener("click", () => {
-  const [w, h] = $("still-size").value.split("x").map(Number);
+  const [w, h] = stillSize();
   const q = new URLSearchParams(location.search);
   q.set("time", String(Math.round(simTime(store.get()) * 1000) / 1000));
   q.set("width", String(w));
@@ -212,7 +243,7 @@ $("toggle-panel").addEventListener("click", () => {
   $("toggle-panel").setAttribute("aria-expanded", String(!hidden));
   sendView();
 });
-addEventListener("resize", debounce(sendView, 150));
+addEventListener("resize", debounce(() => { sendView(); showViewSize(); }, 150));
 
 function sendView() {
   const stage = $("stage");
@@ -256,10 +287,13 @@ function debounce(fn, ms) {
   let timer = 0;
   return () => { clearTimeout(timer); timer = setTimeout(fn, ms); };
 }
+// the overlay: labelled, and blank while disconnected (no stale numbers)
 setInterval(() => {
-  $("stat-fps").textContent = `${stream.fps().toFixed(1)} fps`;
-  $("stat-latency").textContent = stream.latency == null ? "– ms" : `${Math.round(stream.latency)} ms`;
-  $("stat-size").textContent = stream.lastFrame ? `${(stream.lastFrame.bytes / 1024).toFixed(0)} KB` : "– KB";
+  const live = stream.connected;
+  $("stat-fps").textContent = live ? `${stream.fps().toFixed(1)} fps` : "–";
+  $("stat-latency").textContent = live && stream.latency != null ? `${Math.round(stream.latency)} ms` : "–";
+  $("stat-size").textContent = live && stream.lastFrame ? `${(stream.lastFrame.bytes / 1024).toFixed(0)} KB` : "–";
+  $("stat-refining").hidden = !(live && stream.lastFrame && !stream.lastFrame.full);
 }, 250);
 
 if (innerWidth < 900) {   // phones and narrow windows start with the view, not the panel
@@ -267,4 +301,5 @@ if (innerWidth < 900) {   // phones and narrow windows start with the view, not 
   $("toggle-panel").setAttribute("aria-expanded", "false");
 }
 sendView();
+showViewSize();
 stream.connect();

@@ -38,6 +38,7 @@ export const store = createStore({
   pendingParams: null,  // params patch waiting for the next animation frame
   pendingCamera: null,  // camera patch waiting for the next animation frame
   flushQueued: false,   // an animation frame will send the pending patches
+  unsent: null,         // params patch made while disconnected, sent on reconnect
 });
 
 // Values derived from the state (no second copy is kept).

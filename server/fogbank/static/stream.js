@@ -56,7 +56,8 @@ export class Stream extends EventTarget {
       this.sendTimes = [];
       this.dispatchEvent(new CustomEvent("close", { detail: { code: ev.code, reason: ev.reason } }));
       if (RETRY_CODES.has(ev.code) || ev.code === 1001 || ev.code === 1005) {
-        const delay = Math.min(4000, 250 * 2 ** this.retry++);
+        // 250, 500, then every second: back within about a second of the server's return
+        const delay = Math.min(1000, 250 * 2 ** this.retry++);
         this.dispatchEvent(new CustomEvent("reconnecting", { detail: { delay, code: ev.code } }));
         setTimeout(() => this.connect(), delay);
       }
@@ -118,7 +119,10 @@ export class Stream extends EventTarget {
     this.dispatchEvent(new CustomEvent("frame", { detail: this.lastFrame }));
   }
 
+  // frames per second over the last two seconds (0 once frames stop coming)
   fps() {
+    const now = performance.now();
+    while (this.frameTimes.length && now - this.frameTimes[0] > 2000) this.frameTimes.shift();
     const n = this.frameTimes.length;
     if (n < 2) return 0;
     return (n - 1) * 1000 / (this.frameTimes[n - 1] - this.frameTimes[0]);

@@ -110,7 +110,7 @@ class Session:
                 out = [self.state(now)]
                 if bad:
                     out.append({"type": "error", "detail": bad, "kept": True,
-                                "msg": "; ".join(errors.summary([e]) for e in bad)})
+                                "msg": "; ".join(f"{e['loc'][-1]} ({e['msg']})" for e in bad)})
                 return out
             if isinstance(msg, (ParamsMsg, CameraMsg)):
                 patch = msg.params if isinstance(msg, ParamsMsg) else {"camera": msg.camera}
