@@ -73,6 +73,8 @@ def filter_case(ctx, case) -> bool:
         if isinstance(rays, list) and len({r.get("time", 0) for r in rays if isinstance(r, dict)}) > 16:
             return False
         return _look_ok(body.get("params", {}))
+    if body is not None and "kind" in body:   # /api/layers/suggest: a kind and a look
+        return _look_ok(body.get("params", {}))
     return _look_ok(body)
 
 

@@ -549,3 +549,26 @@ def test_what_you_share_and_download_is_what_you_see(server, browser):
     assert max(w, h) == 1920
     assert abs(w / h - stage[0] / stage[1]) <= 0.01
     ctx.close()
+
+
+def test_adding_layers_counts_every_click_opens_them_and_never_whites_out(server, browser):
+    """Issue 12, finding 4: five quick clicks on "Add layer" added three layers, each new
+    layer opened collapsed, and its defaults whited out the view. Every click now adds a
+    layer, the new ones open, and each is the server's suggestion for the look (thin enough:
+    tests/gl/test_suggest.py)."""
+    page = new_page(browser, server.url + "/?v=1&time=3&play=0")
+    wait_frames(page, 1)
+    wait_quiet(page)
+    n0 = page.evaluate("window.fogbank.store.get().confirmed.params.layers.length")
+    add = page.locator("fieldset.list .add").filter(has=page.get_by_role("button", name="Add layer"))
+    add.locator("select").select_option("homogeneous")
+    for _ in range(5):
+        add.get_by_role("button", name="Add layer").click()
+    page.wait_for_function(f"window.fogbank.store.get().confirmed.params.layers.length === {n0 + 5}")
+    layers = page.evaluate("window.fogbank.store.get().confirmed.params.layers")
+    assert [l["kind"] for l in layers[n0:]] == ["homogeneous"] * 5
+    assert all(l["density"] < 0.01 for l in layers[n0:])      # the bare default is 0.01/m
+    page.wait_for_selector(f"[data-path='layers.{n0 + 4}.density']", state="visible")
+    assert page.locator("details.item[open]").count() >= 5
+    assert page.errors == []
+    page.context.close()

@@ -190,3 +190,19 @@ def test_schema_valid_input_is_accepted_and_nothing_beyond_it(client):
         assert (r.status_code, r.json()["detail"][0]["loc"][:len(loc)]) == (422, loc)
     assert client.post("/api/still?format=jpg", json={"width": 32, "height": 24,
                                                       "fog_color": "C5CCD6"}).status_code == 200
+
+
+def test_a_suggested_layer_suits_the_look_and_an_unknown_kind_is_named(client):
+    r = client.post("/api/layers/suggest", json={"kind": "homogeneous", "params": {}})
+    assert r.status_code == 200
+    layer = r.json()
+    assert layer["kind"] == "homogeneous" and 0 < layer["density"] < 0.01
+    cam = {"position": [0, 30, 0], "yaw": 90, "pitch": 0}
+    r = client.post("/api/layers/suggest", json={"kind": "sphere", "params": {"camera": cam}})
+    assert r.status_code == 200 and r.json()["center"][0] > 10     # in front of a camera facing +x
+    r = client.post("/api/layers/suggest", json={"kind": "fog", "params": {}})
+    assert r.status_code == 422
+    assert r.json()["detail"][0]["loc"][-1] == "kind"
+    r = client.post("/api/layers/suggest", json={"kind": "box", "params": {"density": 99}})
+    assert r.status_code == 422
+    assert r.json()["detail"][0]["loc"][-1] == "density"

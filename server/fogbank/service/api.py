@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import asyncio
 import hashlib
 import json
 import logging
@@ -32,7 +33,8 @@ from fogbank.workers import worker
 from fogbank.model import presets as P
 from fogbank.render.encode import MEDIA_TYPES
 from fogbank.service.limits import RequestLimits
-from fogbank.model.params import FogParams, StillParams
+from fogbank.model.params import LAYER_CLASSES, FogParams, StillParams
+from fogbank.model.suggest import suggest_layer
 from fogbank.model.fields import RAY_LIMIT, Direction, Position, Strict
 from fogbank.service.security import SecurityHeaders, origin_allowed
 from fogbank.workers.supervisor import Supervisor, WorkerError
@@ -53,6 +55,12 @@ class Ray(Strict):
                             json_schema_extra={"contains": {"not": {"const": 0}}})
     length: float = Field(ge=0, le=RAY_LIMIT, strict=True, description="m")
     time: float = Field(0.0, ge=0, le=1e6, strict=True, description="s")
+
+
+class SuggestRequest(Strict):
+    kind: Literal[tuple(LAYER_CLASSES)] = Field(description="the new layer's kind")   # type: ignore[valid-type]
+    params: dict[str, Any] = Field(default_factory=dict,
+                                   description="the look it joins: a patch over the default preset")
 
 
 class TransmittanceRequest(Strict):
@@ -317,6 +325,19 @@ def create_app(settings: Settings | None = None) -> FastAPI:
                          deadline=settings.render_timeout_s)
         return {"transmittance": [float(x) for x in out["T"]],
                 "renderer": state["workers"].info.get("renderer", "")}
+
+    suggest_lock = asyncio.Lock()
+
+    @app.post("/api/layers/suggest", response_model=dict[str, Any],
+              responses={413: TOO_LARGE, 422: {"description": "an unknown kind, or bad params"}},
+              summary="A new layer for a look: its kind's defaults, placed in front of the camera "
+                      "and thinned so that it cannot white out the view")
+    async def suggest(req: SuggestRequest):
+        fog = resolve(req.params, FogParams, ("body", "params"))
+        # float64 numpy on a thread (a noise layer may bake its tile), one at a time: the
+        # loop stays free and a burst of requests takes one core at most
+        async with suggest_lock:
+            return await asyncio.to_thread(suggest_layer, req.kind, fog)
 
     @app.get("/api/schema", summary="JSON Schema of the params (ranges, slider steps, units)")
     async def schema():

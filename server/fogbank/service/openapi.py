@@ -114,9 +114,11 @@ def build(app) -> dict[str, Any]:
         "schema": {"$ref": REF.format(model="StillParams")}}},
         "description": "StillParams fields, a patch over the default preset"}
     post_still["description"] = (post_still.get("description", "") + "\n\n" + RULES).strip()
-    tr = schemas.get("TransmittanceRequest")
-    if tr:
-        tr["properties"]["params"] = {"$ref": REF.format(model="FogParams"),
-                                      "description": "a patch over the default preset"}
+    for name in ("TransmittanceRequest", "SuggestRequest"):
+        req = schemas.get(name)
+        if req:
+            req["properties"]["params"] = {"$ref": REF.format(model="FogParams"),
+                                           "description": "a patch over the default preset"}
     paths["/api/transmittance"]["post"]["description"] = RULES
+    paths["/api/layers/suggest"]["post"]["description"] = RULES
     return doc

@@ -69,8 +69,25 @@ const controls = new Controls($("controls"), schema, (path, value) => {
     };
   });
   queueFlush();
-});
+}, addLayer);
 controls.onChange.interact = setInteract;
+
+// "Add layer": the server suggests one that suits the look (placed in front of the
+// camera, thin enough never to white out the view); each click appends to the list as it
+// is when its answer comes, and the new layer opens.
+async function addLayer(path, kind) {
+  let layer = { kind };
+  try {
+    const r = await fetch("/api/layers/suggest", {
+      method: "POST", headers: { "content-type": "application/json" },
+      body: JSON.stringify({ kind, params: store.get().params }),
+    });
+    if (r.ok) layer = await r.json();
+  } catch { /* offline: the kind's defaults */ }
+  const list = path.reduce((v, k) => v[k], store.get().params);
+  controls.open([...path, list.length].join("."));
+  controls.onChange(path, [...list, layer]);
+}
 
 // ------------------------------------------------------------------ camera
 new CameraInput(canvas, () => store.get().params.camera, (patch) => {

@@ -202,8 +202,15 @@ function listControl(schema, path, node, value, onChange, ctx) {
     const kinds = Object.keys(node.items.discriminator.mapping);
     const sel = el("select", { id });
     for (const k of kinds) sel.append(el("option", { value: k }, k));
+    if (ctx.addKind) sel.value = ctx.addKind;   // the kind last chosen survives a redraw
+    sel.addEventListener("change", () => { ctx.addKind = sel.value; });
     const b = el("button", { type: "button", disabled: value.length >= max }, "Add layer");
-    b.addEventListener("click", (e) => { e.preventDefault(); set([...value, { kind: sel.value }]); });
+    b.addEventListener("click", (e) => {
+      e.preventDefault();
+      // the page adds it to the list as it is then (every click counts), opened
+      if (ctx.addLayer) ctx.addLayer(path, sel.value);
+      else set([...value, { kind: sel.value }]);
+    });
     add.append(el("label", { for: id }, "Kind"), sel, b);
   } else {
     const b = el("button", { type: "button", disabled: value.length >= max }, `Add ${label(path.at(-1), node).replace(/s$/, "")}`);
@@ -223,12 +230,17 @@ function swap(list, i, j) {
 }
 
 export class Controls {
-  constructor(form, schema, onChange) {
+  // addLayer(path, kind): how "Add layer" adds one (the page asks the server for a layer
+  // that suits the look); without it, the kind's bare defaults.
+  constructor(form, schema, onChange, addLayer = null) {
     this.form = form;
     this.schema = schema;
     this.onChange = onChange;
-    this.ctx = { openGroups: new Set(["layers.0"]) };
+    this.ctx = { openGroups: new Set(["layers.0"]), addLayer };
   }
+
+  // open the group or list item at `path` (a dotted path) when it is next drawn
+  open(path) { this.ctx.openGroups.add(path); }
 
   // Show `value`. The form is rebuilt only when its shape changes (layers or list items
   // added, removed, reordered or of another kind); otherwise every control is set in
