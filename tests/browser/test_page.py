@@ -73,6 +73,18 @@ def wait_quiet(page, quiet_s=1.0, timeout=60):
     raise AssertionError("the stream did not go quiet")
 
 
+def drag_view(page, dx, dy, steps=10):
+    """Drag the view from its centre, `steps` moves of (dx, dy) pixels."""
+    box = page.locator("#view").bounding_box()
+    x, y = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
+    page.mouse.move(x, y)
+    page.mouse.down()
+    for i in range(1, steps + 1):
+        page.mouse.move(x + dx * i, y + dy * i)
+        time.sleep(0.03)
+    page.mouse.up()
+
+
 def canvas_pixels(page) -> np.ndarray:
     url = page.evaluate("document.getElementById('view').toDataURL('image/png')")
     data = base64.b64decode(url.split(",", 1)[1])
@@ -157,14 +169,7 @@ def test_dragging_the_view_moves_the_camera(server, browser):
     wait_frames(page, 1)
     wait_full_frame_of_current_version(page)
     before = canvas_pixels(page)
-    box = page.locator("#view").bounding_box()
-    x, y = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
-    page.mouse.move(x, y)
-    page.mouse.down()
-    for i in range(1, 11):
-        page.mouse.move(x - 12 * i, y + 2 * i)
-        time.sleep(0.03)
-    page.mouse.up()
+    drag_view(page, -12, 2)
     page.wait_for_function("location.search.includes('camera.yaw=')")
     yaw = float(page.evaluate("new URLSearchParams(location.search).get('camera.yaw')"))
     assert yaw != 5.0
@@ -429,14 +434,7 @@ def test_the_panel_follows_the_look_through_drags_edits_presets_and_pauses(serve
     page.locator("summary", has_text="camera").first.click()   # open the camera group
     start = page.evaluate("window.fogbank.store.get().confirmed.params.camera")
     # 1. a drag: the camera fields follow it
-    box = page.locator("#view").bounding_box()
-    x, y = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
-    page.mouse.move(x, y)
-    page.mouse.down()
-    for i in range(1, 11):
-        page.mouse.move(x - 12 * i, y + 3 * i)
-        time.sleep(0.03)
-    page.mouse.up()
+    drag_view(page, -12, 3)
     wait_quiet(page)
     dragged = page.evaluate("window.fogbank.store.get().confirmed.params.camera")
     assert dragged["yaw"] != start["yaw"] and dragged["pitch"] != start["pitch"]

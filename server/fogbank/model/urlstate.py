@@ -182,42 +182,55 @@ def _field_ann(cls: type[BaseModel] | None, name: str) -> Any:
     return cls.model_fields[name].annotation
 
 
-def decode(query: str, cls: type[FogParams] = FogParams) -> tuple[dict, str]:
-    """Query string -> (params dict ready for validation, base preset name).
-
-    The dict is the base preset with the query's fields patched in; validating it with
-    `cls` gives the params. Raises URLError for a malformed query.
-    """
+def _fields(query: str, lenient: bool) -> tuple[dict[str, str], str, list[dict[str, Any]]]:
+    """(the look's fields, the base preset, errors) of a query: page-only keys removed,
+    `v` and `preset` read. Raises URLError for an over-long or malformed query. With
+    `lenient`, a bad version or preset is read as this version and "default"."""
     if len(query) > MAX_QUERY:
         raise URLError([error(["query"], f"query longer than {MAX_QUERY} characters", "url_too_long")])
     try:
-        pairs = parse_qsl(query, keep_blank_values=True, strict_parsing=bool(query),
-                          max_num_fields=1000)
+        pairs = parse_qsl(query, keep_blank_values=True, strict_parsing=bool(query), max_num_fields=1000)
     except ValueError as exc:
         raise URLError([error(["query"], f"malformed query string: {exc}", "url_malformed")]) from None
     fields: dict[str, str] = {}
     errors: list[dict[str, Any]] = []
     for k, v in pairs:
         if k in fields:
-            _err(errors, k, "given more than once", "url_duplicate")
+            _err(errors, k, "given more than once" + ("; the last is used" if lenient else ""), "url_duplicate")
         fields[k] = v
     for key in VIEW_KEYS:
         fields.pop(key, None)
     version = fields.pop("v", str(VERSION))
     if version != str(VERSION):
-        _err(errors, "v", f"unknown URL version {version!r}; this server reads version {VERSION}",
+        _err(errors, "v", f"unknown URL version {version!r}; " +
+             (f"read as version {VERSION}" if lenient else f"this server reads version {VERSION}"),
              "url_version")
     base = fields.pop("preset", "default")
     if base not in P.presets():
-        _err(errors, "preset", f"unknown preset {base!r}; one of {', '.join(P.presets())}",
-             "url_preset")
+        _err(errors, "preset", f"unknown preset {base!r}; one of {', '.join(P.presets())}" +
+             ("; the rest is applied to 'default'" if lenient else ""), "url_preset")
         base = "default"
-    if errors:
-        raise URLError(errors)
+    return fields, base, errors
+
+
+def _base_value(base: str, cls: type[FogParams]) -> dict:
     value: dict = P.preset_dict(base)
     if cls is StillParams:
         value = {**value, "width": StillParams.model_fields["width"].default,
                  "height": StillParams.model_fields["height"].default}
+    return value
+
+
+def decode(query: str, cls: type[FogParams] = FogParams) -> tuple[dict, str]:
+    """Query string -> (params dict ready for validation, base preset name).
+
+    The dict is the base preset with the query's fields patched in; validating it with
+    `cls` gives the params. Raises URLError for a malformed query.
+    """
+    fields, base, errors = _fields(query, lenient=False)
+    if errors:
+        raise URLError(errors)
+    value = _base_value(base, cls)
     # shallow keys first, and an item's `kind` before its other fields, so that lists
     # exist and items are filled from their class's defaults before fields are patched
     for key in sorted(fields, key=lambda k: (k.count("."), not k.endswith(".kind"), k)):
@@ -234,33 +247,9 @@ def decode_lenient(query: str, cls: type[FogParams] = FogParams) -> tuple[FogPar
     field that does not parse or validate is dropped (with the fields under it). Raises
     URLError only when nothing can be read: an over-long or malformed query, or an error
     that no single field of the query caused."""
-    if len(query) > MAX_QUERY:
-        raise URLError([error(["query"], f"query longer than {MAX_QUERY} characters", "url_too_long")])
-    try:
-        pairs = parse_qsl(query, keep_blank_values=True, strict_parsing=bool(query), max_num_fields=1000)
-    except ValueError as exc:
-        raise URLError([error(["query"], f"malformed query string: {exc}", "url_malformed")]) from None
-    errors: list[dict[str, Any]] = []
-    fields: dict[str, str] = {}
-    for k, v in pairs:
-        if k in fields:
-            _err(errors, k, "given more than once; the last is used", "url_duplicate")
-        fields[k] = v
-    for key in VIEW_KEYS:
-        fields.pop(key, None)
-    version = fields.pop("v", str(VERSION))
-    if version != str(VERSION):
-        _err(errors, "v", f"unknown URL version {version!r}; read as version {VERSION}", "url_version")
-    base = fields.pop("preset", "default")
-    if base not in P.presets():
-        _err(errors, "preset", f"unknown preset {base!r}; one of {', '.join(P.presets())}; "
-             "the rest is applied to 'default'", "url_preset")
-        base = "default"
+    fields, base, errors = _fields(query, lenient=True)
     for _ in range(16):   # each round drops at least one field
-        value: dict = P.preset_dict(base)
-        if cls is StillParams:
-            value = {**value, "width": StillParams.model_fields["width"].default,
-                     "height": StillParams.model_fields["height"].default}
+        value = _base_value(base, cls)
         bad: list[dict[str, Any]] = []
         for key in sorted(fields, key=lambda k: (k.count("."), not k.endswith(".kind"), k)):
             _set(cls, value, key, fields[key], bad)
