@@ -31,7 +31,7 @@ class Settings(BaseSettings):
     frame_deadline_s: float = Field(10.0, gt=0, le=600, description="deadline of one stream frame")
     queue_timeout_s: float = Field(30.0, gt=0, le=3600, description="longest wait for a worker "
                                    "before a job starts; beyond, 503")
-    worker_cache_mb: int = Field(256, ge=16, le=65536, description="GL cache budget of each worker "
+    worker_cache_mb: int = Field(192, ge=16, le=65536, description="GL cache budget of each worker "
                                  "(render targets and cached scene passes), MiB")
     batch_cache_mb: int = Field(128, ge=16, le=65536, description="GL cache budget of each batch "
                                 "worker, MiB (stills rarely reuse a cached scene pass)")

@@ -784,3 +784,22 @@ def test_fine_cosine_waves_do_not_alias_into_stripes(renderer):
         band = ground & (dist > lo) & (dist < hi)
         assert int(band.sum()) > 1000
         assert float(np.sqrt(np.mean((got - want)[band] ** 2))) <= 0.002
+
+
+def test_the_frame_just_drawn_counts_against_the_whole_cache_budget(renderer):
+    """Scene passes of 6 slots at 1280x720 and then one at 1920x1080, in a 128 MB cache:
+    after each frame the caches hold at most the budget or that frame's own targets and
+    scene pass, whichever is more. Before, each half of the budget could keep its share of
+    the frame on top of a full half of other entries."""
+    from fogbank.render.renderer import Renderer
+    r = Renderer(renderer.ctx, cache_bytes=128 << 20)
+    base = StillParams(width=1280, height=720, effects={"sun_through_fog": True})
+    sizes = [(1280, 720)] * 6 + [(1920, 1080)]
+    for i, (w, h) in enumerate(sizes):
+        still = base.model_copy(update={"width": w, "height": h,
+                                        "camera": base.camera.model_copy(update={"yaw": float(i)})})
+        r.render(still, slot=f"s{i}")
+        own = r.caches.targets(w, h).nbytes() + r.caches.gbuffer(f"s{i}", w, h, True).nbytes()
+        assert r.cache_bytes() <= max(128 << 20, own)
+    assert r.cache_bytes() > 128 << 20        # the 1080p frame alone is over the budget: it is kept
+    r.release_caches()

@@ -43,14 +43,15 @@ class ByteLRU:
         if item is not None:
             item.release()
 
-    def trim(self, keep: Iterable[Hashable] = ()) -> int:
+    def trim(self, keep: Iterable[Hashable] = (), budget: int | None = None) -> int:
         """Release least recently used entries (other than `keep`) until the total is
-        within the budget; returns the bytes released."""
+        within the budget (or `budget`, for this call); returns the bytes released."""
         keep = set(keep)
+        limit = self.budget if budget is None else int(budget)
         total = self.nbytes()
         freed = 0
         for key in list(self._items):
-            if total <= self.budget:
+            if total <= limit:
                 break
             if key in keep:
                 continue
