@@ -102,12 +102,11 @@ new CameraInput(canvas, () => store.get().params.camera, (patch) => {
 stream.addEventListener("hello", (e) => { $("stat-renderer").textContent = e.detail.renderer; });
 stream.addEventListener("state", (e) => {
   const { type, ...confirmed } = e.detail;
-  store.update((s) => ({
-    confirmed,
+  store.update((s) => {
     // keep the camera being dragged, and edits not yet sent
-    params: merge(s.interacting && s.params ? { ...confirmed.params, camera: s.params.camera } : confirmed.params,
-      s.unsent || {}),
-  }));
+    const shown = s.interacting && s.params ? { ...confirmed.params, camera: s.params.camera } : confirmed.params;
+    return { confirmed, params: s.unsent ? merge(shown, s.unsent) : shown };
+  });
   const s = store.get();
   if (s.redrawNext) {
     controls.render(s.params);

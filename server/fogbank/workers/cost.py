@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 from fogbank.kinds import KINDS
 from fogbank.kinds.packing import enabled, uses_noise, variant
 from fogbank.model.params import FogParams, StillParams
+from fogbank.render.passes.fog_filter import jittered
 from fogbank.render.targets import FOG_BPP, GBUFFER_BPP, LINEAR_BPP, MSAA_BPP, MSAA_SAMPLES, OUT_BPP, SUNLIGHT_BPP
 
 # seconds on the reference machine
@@ -93,8 +94,8 @@ def estimate(still: StillParams, msaa: bool = True, fmt: str = "jpg", scale: flo
             _layer_seconds(layer, fog_mpx) for layer in still.layers if layer.enabled)
     if e.shafts > 0:
         parts["effects.shafts"] = SHAFTS_S_PER_FOG_MPX * fog_mpx
-    jittered = e.shafts > 0 or any(l.enabled and l.kind == "noise" and l.mode == "volume" for l in still.layers)
-    if jittered:   # passes/fog_filter.py
+    filtered = jittered(still)
+    if filtered:   # passes/fog_filter.py
         parts["the filter of jittered samples (volume noise, shafts)"] = JITTER_FILTER_S_PER_FOG_MPX * fog_mpx
     n = still.noise
     if uses_noise(still) and (n.size, n.octaves, n.blur, n.seed) != DEFAULT_BAKE:
@@ -104,7 +105,7 @@ def estimate(still: StillParams, msaa: bool = True, fmt: str = "jpg", scale: flo
         # toward the sun, the layers' code is inlined a second time
         parts[f"compiling the fog program for {len(key)} layers (once per worker)"] = \
             jit_seconds(key) * (2 if e.sun_through_fog else 1)
-    memory = px * (OUT_BPP + GBUFFER_BPP + 3 + 4) + int(fog_mpx * 1e6) * FOG_BPP * (2 if jittered else 1)
+    memory = px * (OUT_BPP + GBUFFER_BPP + 3 + 4) + int(fog_mpx * 1e6) * FOG_BPP * (2 if filtered else 1)
     if msaa:
         memory += px * MSAA_BPP
     if e.sun_through_fog:   # the direct sunlight: near and far surface in the G-buffer, and the MSAA target

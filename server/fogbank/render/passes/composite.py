@@ -41,17 +41,18 @@ class CompositePass(Pass):
             progs.append(r.programs.get("passes/tiles.vert", "passes/composite.frag", TWO_SURFACES=1,
                                         TILE=SILHOUETTE_TILE, **defines))
             set_uniforms(progs[1], {"uViewport": np.array(f.targets.size, dtype=float)})
+        uniforms = {
+            "uFwd": v.fwd, "uRight": v.right, "uUp": v.up,
+            "uFogColor": np.array(srgb_to_linear(look.fog_color)),
+            "uSunDir": look.sun.direction(),
+            "uScatterColor": sun_color(look) * np.array(srgb_to_linear(e.scatter_color)) * e.scatter,
+            "uScatterStart": e.scatter_start, "uSkyDistance": e.sky_distance, "uSkyAffect": e.sky_affect,
+            "uScatterExponent": e.scatter_exponent, "uBlurSigma": blur_sigma(f),
+            "uPhaseHG": e.phase == "henyey-greenstein", "uAnisotropy": e.anisotropy,
+            "uShafts": e.shafts,
+            "uMaxOpacity": e.max_opacity, "uBlurExponent": e.blur_exponent}
         for prog in progs:
-            set_uniforms(prog, {
-                "uFwd": v.fwd, "uRight": v.right, "uUp": v.up,
-                "uFogColor": np.array(srgb_to_linear(look.fog_color)),
-                "uSunDir": look.sun.direction(),
-                "uScatterColor": sun_color(look) * np.array(srgb_to_linear(e.scatter_color)) * e.scatter,
-                "uScatterStart": e.scatter_start, "uSkyDistance": e.sky_distance, "uSkyAffect": e.sky_affect,
-                "uScatterExponent": e.scatter_exponent, "uBlurSigma": blur_sigma(f),
-                "uPhaseHG": e.phase == "henyey-greenstein", "uAnisotropy": e.anisotropy,
-                "uShafts": e.shafts,
-                "uMaxOpacity": e.max_opacity, "uBlurExponent": e.blur_exponent})
+            set_uniforms(prog, uniforms)
         if mode == BLUR_MODES["single"]:
             g.mipmaps()   # the fused blur reads the scene's mip pyramid
         g.color.use(TEX["uColor"])

@@ -12,18 +12,20 @@ from fogbank.render.passes.base import Pass
 from fogbank.render.programs import FULLSCREEN
 
 
-def jittered(still, plan) -> bool:
-    """Does the fog pass sample with a per-pixel jitter for this look?"""
-    return still.effects.shafts > 0 or ("noise", ("volume",)) in plan.key
+def jittered(look) -> bool:
+    """Does the fog pass sample with a per-pixel jitter for this look (light shafts, or an
+    enabled volume noise layer)? The cost model asks the same."""
+    return look.effects.shafts > 0 or any(
+        l.enabled and l.kind == "noise" and l.mode == "volume" for l in look.layers)
 
 
 class FogFilterPass(Pass):
     name = "fog_filter"
-    reads = ("fog", "fog_plan")
+    reads = ("fog", "look")
     writes = ("fog",)
 
     def run(self, r, f) -> None:
-        if not jittered(f.still, f.fog_plan()):
+        if not jittered(f.still):
             return
         fbo, tex = f.targets.fog_target(f.still.effects.fog_scale, 1)
         fbo.use()   # the particle quads draw into the bound target
