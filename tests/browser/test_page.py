@@ -5,7 +5,6 @@ Screenshots go to out/screenshots/ (ignored by git)."""
 
 from __future__ import annotations
 
-import base64
 import io
 import json
 import re
@@ -17,6 +16,8 @@ import numpy as np
 import pytest
 from PIL import Image
 
+from pages import (PANEL, canvas_pixels, drag_view, new_page, panel_and_state, wait_frames,
+                   wait_full_frame_of_current_version, wait_quiet, _at, _read, _shown)
 from servers import Server
 
 SHOTS = Path(__file__).resolve().parents[2] / "out" / "screenshots"
@@ -27,68 +28,6 @@ def server():
     s = Server().start()
     yield s
     s.stop()
-
-
-def new_page(browser, url, w=1280, h=720, bypass_csp=True, before=None):
-    # Playwright's wait_for_function evaluates strings, which the page's CSP forbids (no
-    # 'unsafe-eval'); test_page_runs_under_its_csp checks the page with the CSP enforced
-    ctx = browser.new_context(viewport={"width": w, "height": h}, bypass_csp=bypass_csp)
-    ctx.grant_permissions(["clipboard-read", "clipboard-write"], origin=url.split("/?")[0].rstrip("/"))
-    page = ctx.new_page()
-    errors = []
-    page.on("pageerror", lambda e: errors.append(str(e)))
-    if before:
-        before(page)   # e.g. listeners that must see the page from its first message
-    page.goto(url)
-    page.errors = errors
-    return page
-
-
-def wait_frames(page, n=3, timeout=60000):
-    page.wait_for_function(f"Number(document.getElementById('view').dataset.frames || 0) >= {n}",
-                           timeout=timeout)
-
-
-def wait_full_frame_of_current_version(page, timeout=60000):
-    """Until a full-quality frame shows the look the server last confirmed."""
-    page.wait_for_function(
-        "(() => { const c = document.getElementById('view');"
-        " return c.dataset.full === 'true' && Number(c.dataset.version) >= window.fogbank.version; })()",
-        timeout=timeout)
-    time.sleep(0.3)   # let the canvas draw finish
-
-
-def wait_quiet(page, quiet_s=1.0, timeout=60):
-    """Until no frame has arrived for `quiet_s` and no patch waits to be sent."""
-    deadline = time.monotonic() + timeout
-    last, since = None, time.monotonic()
-    while time.monotonic() < deadline:
-        now = page.evaluate("(() => { const s = window.fogbank.store.get();"
-                            " return [s.frames, !!(s.pendingParams || s.pendingCamera || s.flushQueued)]; })()")
-        if now != last:
-            last, since = now, time.monotonic()
-        elif not now[1] and time.monotonic() - since >= quiet_s:
-            return
-        time.sleep(0.1)
-    raise AssertionError("the stream did not go quiet")
-
-
-def drag_view(page, dx, dy, steps=10):
-    """Drag the view from its centre, `steps` moves of (dx, dy) pixels."""
-    box = page.locator("#view").bounding_box()
-    x, y = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
-    page.mouse.move(x, y)
-    page.mouse.down()
-    for i in range(1, steps + 1):
-        page.mouse.move(x + dx * i, y + dy * i)
-        time.sleep(0.03)
-    page.mouse.up()
-
-
-def canvas_pixels(page) -> np.ndarray:
-    url = page.evaluate("document.getElementById('view').toDataURL('image/png')")
-    data = base64.b64decode(url.split(",", 1)[1])
-    return np.asarray(Image.open(io.BytesIO(data)).convert("RGB")).astype(int)
 
 
 def test_page_loads_and_frames_arrive(server, browser):
@@ -238,7 +177,7 @@ def test_controls_are_keyboard_reachable_and_labelled(server, browser):
     page.locator("#preset").focus()
     for _ in range(12):
         page.keyboard.press("Tab")
-    assert page.evaluate("document.activeElement.tagName") in ("BUTTON", "SELECT", "INPUT")
+    assert page.evaluate("document.activeElement.tagName") in ("BUTTON", "SELECT", "INPUT", "SUMMARY")
     page.context.close()
 
 
@@ -327,43 +266,6 @@ def test_a_frame_decoded_late_never_draws_over_a_newer_one(server, browser):
     page.context.close()
 
 
-PANEL = """[...document.querySelectorAll('#controls [data-path]')].map((e) =>
-  [e.dataset.path, e.type, e.type === 'checkbox' ? e.checked : e.value])"""
-
-
-def _at(params, path):
-    v = params
-    for key in path.split("."):
-        v = v[int(key)] if isinstance(v, list) else v[key]
-    return v
-
-
-def _shown(kind, v):
-    """What a control of this input type shows for the value `v` (as the panel writes it)."""
-    if kind == "checkbox":
-        return bool(v)
-    if v is None:
-        return None
-    if kind == "text" and isinstance(v, list):
-        return [float(x) for x in v]
-    if isinstance(v, (int, float)) and not isinstance(v, bool):
-        return float(v)
-    return str(v).lower()
-
-
-def _read(kind, raw):
-    if kind == "checkbox":
-        return raw
-    if raw == "":
-        return None
-    if kind == "text":
-        return [float(x) for x in re.split(r"[,\s]+", raw) if x]
-    try:
-        return float(raw)
-    except ValueError:
-        return raw.lower()
-
-
 def test_the_store_is_the_one_source_of_the_pages_state(server, browser):
     received = []
 
@@ -415,15 +317,6 @@ def test_the_store_is_the_one_source_of_the_pages_state(server, browser):
     page.context.close()
 
 
-def _panel_and_state(page):
-    """(what the panel shows, what it should show for the look on screen) by data-path."""
-    params = page.evaluate("window.fogbank.store.get().params")
-    panel = page.evaluate(PANEL)
-    shown = {path: _read(kind, raw) for path, kind, raw in panel}
-    expected = {path: _shown(kind, _at(params, path)) for path, kind, _ in panel}
-    return shown, expected
-
-
 def test_the_panel_follows_the_look_through_drags_edits_presets_and_pauses(server, browser):
     """Issue 12, finding 1: the camera fields follow a drag; editing one camera field keeps
     the dragged values of the others; a preset switch while a number field has focus shows
@@ -438,7 +331,7 @@ def test_the_panel_follows_the_look_through_drags_edits_presets_and_pauses(serve
     wait_quiet(page)
     dragged = page.evaluate("window.fogbank.store.get().confirmed.params.camera")
     assert dragged["yaw"] != start["yaw"] and dragged["pitch"] != start["pitch"]
-    shown, expected = _panel_and_state(page)
+    shown, expected = panel_and_state(page)
     assert shown["camera.yaw"] == dragged["yaw"]
     assert shown == expected
     # 2. one position field typed: the others keep the dragged camera
@@ -453,7 +346,7 @@ def test_the_panel_follows_the_look_through_drags_edits_presets_and_pauses(serve
     page.select_option("#preset", "quilez-spheres")
     page.wait_for_function("window.fogbank.store.get().confirmed.params.layers.length === 3")
     page.wait_for_selector("[data-path='layers.2.radius']", state="attached")   # a preset plays on
-    shown, expected = _panel_and_state(page)
+    shown, expected = panel_and_state(page)
     assert shown == expected
     # 4. a pause: the paused time goes into the link, and the preset keeps its name
     assert page.evaluate("window.fogbank.store.get().confirmed.playing") is True
@@ -462,7 +355,7 @@ def test_the_panel_follows_the_look_through_drags_edits_presets_and_pauses(serve
     page.wait_for_function("window.fogbank.store.get().confirmed.playing === false")
     assert "time=" in page.evaluate("window.fogbank.store.get().confirmed.query")
     assert page.locator("#preset").input_value() == "quilez-spheres"
-    shown, expected = _panel_and_state(page)
+    shown, expected = panel_and_state(page)
     assert shown == expected
     assert page.errors == []
     page.context.close()

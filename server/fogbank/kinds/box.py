@@ -13,7 +13,7 @@ import math
 from typing import Annotated, Literal
 
 import numpy as np
-from pydantic import Field
+from pydantic import ConfigDict, Field
 
 from fogbank.kinds.kind import Kind, Layout, exponential
 from fogbank.kinds.rays import slide
@@ -44,7 +44,11 @@ class Oriented(LayerBase):
 
 class Box(Oriented):
     """A box of constant density: tau = density * chord length (slab method)."""
+    model_config = ConfigDict(title="Fog box")
     kind: Literal["box"] = "box"
+    source = "fogbank: a box's chord by the slab method"
+    summary = "A box of constant fog, turned any way: fog lying along a river, a bank of cloud. A negative density carves fog out."
+    formula = r"\tau = \rho\, \ell_{\mathrm{box}}, \quad T = e^{-\tau}"
     half_size: tuple[Extent, Extent, Extent] = Field(
         (10.0, 4.0, 10.0), description="half extents along the box's x, y, z, m (each 0.01-10000)")
 

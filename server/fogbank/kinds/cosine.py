@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Literal
 
 import numpy as np
-from pydantic import Field, model_validator
+from pydantic import ConfigDict, Field, model_validator
 
 from fogbank.kinds.kind import Kind, Layout
 from fogbank.kinds.rays import slide
@@ -16,19 +16,23 @@ MAX_COSINE_TERMS = 8
 
 
 class CosineTerm(Strict):
-    amp: float = num(0.5, -10, 10, 0.01, "", "amplitude c_i")
-    k: tuple[Wave, Wave, Wave] = Field((0.0, 1.0, 0.0), description="wave vector, rad per function unit")
-    phase: float = num(0.0, -1000, 1000, 0.01, "rad", "phase phi_i")
+    amp: float = num(0.5, -10, 10, 0.01, "", "amplitude c_i", title="amplitude cᵢ")
+    k: tuple[Wave, Wave, Wave] = Field((0.0, 1.0, 0.0), title="wave vector kᵢ", description="wave vector, rad per function unit")
+    phase: float = num(0.0, -1000, 1000, 0.01, "rad", "phase phi_i", title="phase φᵢ")
 
 
 class Cosine(LayerBase):
     """Biri 3.2.1: density * (c0 + sum c_i cos(k_i . x / scale + phi_i))."""
+    model_config = ConfigDict(title="Cosine layers")
     kind: Literal["cosine"] = "cosine"
-    density: float = num(0.01, 0, 10, 0.0005, "1/m", "overall weight")
-    c0: float = num(1.0, 0, 100, 0.01, "", "constant term")
+    source = "Biri, Michelin & Arquès 2002, section 3.2.1"
+    summary = "Bands and waves of fog from a sum of cosines, integrated exactly along each ray; the wind slides their phases."
+    formula = r"\rho(\mathbf{x}) = \rho \left(c_0 + \sum_i c_i \cos\left(\frac{\mathbf{k}_i \cdot \mathbf{x}}{s} + \varphi_i\right)\right)"
+    density: float = num(0.01, 0, 10, 0.0005, "1/m", "overall weight", title="density ρ")
+    c0: float = num(1.0, 0, 100, 0.01, "", "constant term; at least the sum of |amplitude| (no negative density)", title="constant c₀")
     terms: list[CosineTerm] = Field(default_factory=lambda: [CosineTerm()],
                                     max_length=MAX_COSINE_TERMS)
-    scale: float = num(20.0, 0.01, 10000, 0.5, "m", "scene metres per function unit", gt=True)
+    scale: float = num(20.0, 0.01, 10000, 0.5, "m", "scene metres per function unit", gt=True, title="scale s")
 
     @model_validator(mode="after")
     def _nonnegative(self) -> "Cosine":

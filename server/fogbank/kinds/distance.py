@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Literal
 
 import numpy as np
+from pydantic import ConfigDict
 
 from fogbank.kinds import noise_bake as bake
 from fogbank.kinds.kind import Kind, Layout, direct
@@ -14,13 +15,17 @@ from fogbank.model.fields import Drift, LayerBase, drift_field, num
 
 class Distance(LayerBase):
     """Gawron 3.1/3.3: F = clamp(N ((d - start)/D)^e, 0, max), N = lerp(low, high, noise)."""
+    model_config = ConfigDict(title="Distance fog")
     kind: Literal["distance"] = "distance"
-    start: float = num(0.0, 0, 10000, 1, "m", "StartDistance")
-    distance: float = num(300.0, 0.1, 100000, 1, "m", "blend distance D", gt=True)
-    exponent: float = num(0.55, 0.01, 10, 0.01, "", "falloff exponent", gt=True)
+    source = "Gawron & Boryczka 2018, sections 3.1 and 3.3"
+    summary = "Fog that grows with distance from the eye, its amount varied by moving noise."
+    formula = r"F = \mathrm{clamp}\left(N \left(\frac{d - d_s}{D}\right)^{e}, 0, F_{max}\right), \quad T = 1 - F"
+    start: float = num(0.0, 0, 10000, 1, "m", "no fog nearer than this (Gawron's StartDistance)", title="start dₛ")
+    distance: float = num(300.0, 0.1, 100000, 1, "m", "blend distance: F reaches N here", gt=True, title="blend distance D")
+    exponent: float = num(0.55, 0.01, 10, 0.01, "", "falloff exponent: below 1 the fog comes in early", gt=True, title="exponent e")
     low: float = num(0.9, 0, 10, 0.01, "", "density where noise = 0")
     high: float = num(1.3, 0, 10, 0.01, "", "density where noise = 1")
-    max: float = num(0.6, 0, 1, 0.01, "", "largest fog amount F")
+    max: float = num(0.6, 0, 1, 0.01, "", "largest fog amount F", title="max fog F_max")
     noise_scale: float = num(80.0, 0.1, 10000, 0.5, "m", "size of one noise tile", gt=True)
     drift: Drift = drift_field()
 

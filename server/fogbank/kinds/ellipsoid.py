@@ -13,7 +13,7 @@ from __future__ import annotations
 from typing import Literal
 
 import numpy as np
-from pydantic import Field
+from pydantic import ConfigDict, Field
 
 from fogbank.kinds import sphere
 from fogbank.kinds.box import Extent, Oriented, pack_oriented, sample_oriented
@@ -23,7 +23,11 @@ from fogbank.kinds.rays import slide
 
 class Ellipsoid(Oriented):
     """The sphere's rho (1 - r^2) profile, r measured in the ellipsoid's radii."""
+    model_config = ConfigDict(title="Fog ellipsoid")
     kind: Literal["ellipsoid"] = "ellipsoid"
+    source = "fogbank: Quilez's sphere profile in an ellipsoid's metric"
+    summary = "An ellipsoid of fog, densest at its centre; a negative density carves a clearing out of the fog around it."
+    formula = r"\rho(\mathbf{x}) = \rho \max\left(0,\ 1 - |M(\mathbf{x} - \mathbf{c})|^2\right)"
     radii: tuple[Extent, Extent, Extent] = Field(
         (20.0, 6.0, 12.0), description="semi-axes along the body's x, y, z, m (each 0.01-10000)")
 

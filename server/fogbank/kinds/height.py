@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Literal
 
 import numpy as np
+from pydantic import ConfigDict
 
 from fogbank.kinds.kind import Kind, Layout, exponential
 from fogbank.kinds.rays import slide
@@ -14,10 +15,14 @@ from fogbank.model.fields import LayerBase, num
 
 class Height(LayerBase):
     """Unreal/Filament height fog: rho * exp(-falloff * (y - base))."""
+    model_config = ConfigDict(title="Height fog")
     kind: Literal["height"] = "height"
-    density: float = num(0.03, 0, 10, 0.0005, "1/m", "extinction at the base height")
-    falloff: float = num(0.15, 0, 5, 0.005, "1/m", "how fast density drops with height")
-    base: float = num(0.0, -200, 200, 0.5, "m", "height where density equals `density`")
+    source = "Exponential height fog, as in Unreal Engine and Filament"
+    summary = "Fog that pools low and thins with height, like mist in a valley."
+    formula = r"\rho(\mathbf{x}) = \rho_0\, e^{-k\,(y - h_0)}"
+    density: float = num(0.03, 0, 10, 0.0005, "1/m", "extinction at the base height", title="density ρ₀")
+    falloff: float = num(0.15, 0, 5, 0.005, "1/m", "how fast density drops with height", title="falloff k")
+    base: float = num(0.0, -200, 200, 0.5, "m", "height where the density is ρ₀", title="base height h₀")
 
 
 def density(layer, x, t, env):

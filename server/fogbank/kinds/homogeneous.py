@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Literal
 
 import numpy as np
+from pydantic import ConfigDict
 
 from fogbank.kinds.kind import Kind, Layout, exponential
 from fogbank.model.fields import LayerBase, num
@@ -12,8 +13,12 @@ from fogbank.model.fields import LayerBase, num
 
 class Homogeneous(LayerBase):
     """OpenGL's exponential fog: constant density."""
+    model_config = ConfigDict(title="Homogeneous fog")
     kind: Literal["homogeneous"] = "homogeneous"
-    density: float = num(0.01, 0, 10, 0.0005, "1/m", "extinction coefficient")
+    source = "OpenGL fixed-function fog, GL_EXP"
+    summary = "The same density everywhere: the view thins evenly with distance."
+    formula = r"T = e^{-\rho d}"
+    density: float = num(0.01, 0, 10, 0.0005, "1/m", "extinction coefficient", title="density ρ")
 
 
 def density(layer, x, t, env):

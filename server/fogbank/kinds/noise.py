@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Literal
 
 import numpy as np
-from pydantic import Field
+from pydantic import ConfigDict, Field
 
 from fogbank.kinds import noise_bake as bake
 from fogbank.kinds.kind import Kind, Layout
@@ -15,9 +15,13 @@ from fogbank.model.fields import Bool, Drift, Int, LayerBase, drift_field, num
 
 class Noise(LayerBase):
     """Perlin fog write-up: baked fractal noise n; surface T = exp(-rho d n) or volumetric."""
+    model_config = ConfigDict(title="Noise fog")
     kind: Literal["noise"] = "noise"
+    source = "Perlin fog (course project write-up)"
+    summary = "Patchy fog from fractal Perlin noise baked into a tiling 3D texture, sliding in time."
+    formula = r"T = e^{-\rho\, d\, n} \quad \text{or} \quad T = e^{-\rho \int_0^d n(s)\, ds}"
     mode: Literal["surface", "volume"] = "surface"
-    density: float = num(0.02, 0, 10, 0.0005, "1/m", "rho")
+    density: float = num(0.02, 0, 10, 0.0005, "1/m", "extinction where the noise is 1", title="density ρ")
     scale: float = num(60.0, 0.1, 10000, 0.5, "m", "size of one noise tile", gt=True)
     height_falloff: Bool = Field(True, description="surface mode: n * dY^2 / 2 + 0.001 (write-up)")
     falloff_scale: float = num(10.0, 0.01, 1000, 0.1, "m", "dY is measured in these units", gt=True)

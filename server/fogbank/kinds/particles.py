@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Annotated, Literal
 
 import numpy as np
-from pydantic import Field, model_validator
+from pydantic import ConfigDict, Field, model_validator
 
 from fogbank.kinds.kind import Kind, Layout
 from fogbank.model.fields import MAX_PARTICLES, Direction, Int, LayerBase, Position, num
@@ -16,7 +16,11 @@ Spread = Annotated[float, Field(strict=True, ge=0.0, le=1000.0)]
 
 class Particles(LayerBase):
     """Fischer: a few free-floating particles; T = prod (1 - alpha s_j clamp(1 - dist_j/R, 0, 1))."""
+    model_config = ConfigDict(title="Particles")
     kind: Literal["particles"] = "particles"
+    source = "Fischer, Clouds, Fog, and Smoke"
+    summary = "A few free-floating particles born at an emitter and carried by the wind: drifting fog or smoke."
+    formula = r"T = \prod_j \left(1 - \alpha\, s_j\, \mathrm{clamp}\left(1 - \frac{d_j}{R}, 0, 1\right)\right)"
     count: Int = Field(120, ge=1, le=MAX_PARTICLES, description="particles alive at once (slots)")
     emitter: Position = Field((10.0, 2.0, 0.0), description="where particles are born, m")
     emitter_size: tuple[Spread, Spread, Spread] = Field(
@@ -28,8 +32,8 @@ class Particles(LayerBase):
     life_min: Int = Field(64, ge=1, le=1000, description="shortest life, steps")
     life_max: Int = Field(128, ge=1, le=1000, description="longest life, steps")
     step: float = num(0.1, 0.005, 10, 0.005, "s", "simulation step", gt=True)
-    radius: float = num(4.0, 0.01, 100, 0.1, "m", "R_j", gt=True)
-    alpha: float = num(0.2, 0, 1, 0.01, "", "max opacity of one particle (0.2 fog, ~1 smoke)")
+    radius: float = num(4.0, 0.01, 100, 0.1, "m", "one particle's radius R", gt=True, title="radius R")
+    alpha: float = num(0.2, 0, 1, 0.01, "", "max opacity of one particle (0.2 fog, ~1 smoke)", title="opacity α")
     gravity: float = num(0.0, -20, 20, 0.1, "m/s^2", "upward acceleration (negative falls)")
     drag: float = num(0.5, 0, 10, 0.05, "1/s", "relaxation of velocity toward the wind")
     seed: Int = Field(1, ge=0, le=2**31 - 1, description="random seed")

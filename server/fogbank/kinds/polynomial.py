@@ -13,7 +13,7 @@ from typing import Literal
 
 import numpy as np
 from numpy.polynomial import polynomial as npoly
-from pydantic import Field, model_validator
+from pydantic import ConfigDict, Field, model_validator
 
 from fogbank.kinds.kind import Kind, Layout
 from fogbank.kinds.rays import slide
@@ -38,14 +38,18 @@ def poly_min(coeffs: list[float], lo: float, hi: float) -> float:
 
 class Polynomial(LayerBase):
     """Biri 3.2.2: density * P(u), u = axis . x + offset, on [-C, C], tiled or zero outside."""
+    model_config = ConfigDict(title="Polynomial tiles")
     kind: Literal["polynomial"] = "polynomial"
-    density: float = num(0.02, 0, 10, 0.0005, "1/m", "weight c_i")
+    source = "Biri, Michelin & Arquès 2002, section 3.2.2"
+    summary = "Fog shaped by a polynomial over one tile along an axis, mirrored or repeated across the scene."
+    formula = r"\rho(\mathbf{x}) = \rho\, P(u), \quad P(u) = \sum_i p_i u^i, \quad u = \mathbf{a} \cdot \mathbf{x} + b \in [-C, C]"
+    density: float = num(0.02, 0, 10, 0.0005, "1/m", "weight c_i", title="density ρ")
     coeffs: list[Num] = Field([0.8, -1.0, 0.0, 0.0, 1.0], min_length=1,
-                                max_length=MAX_POLY_COEFFS,
+                                max_length=MAX_POLY_COEFFS, title="coefficients pᵢ",
                                 description="P(u) = sum coeffs[i] u^i (ascending powers)")
-    axis: tuple[Wave, Wave, Wave] = Field((1.0 / 60.0, 0.0, 0.0), description="u = axis . x + offset, 1/m")
-    offset: float = num(0.0, -1000, 1000, 0.01, "", "added to u")
-    half_width: float = num(1.0, 1e-3, 1000, 0.01, "", "C: P is defined on [-C, C]", gt=True)
+    axis: tuple[Wave, Wave, Wave] = Field((1.0 / 60.0, 0.0, 0.0), title="axis a", description="u = axis . x + offset, 1/m")
+    offset: float = num(0.0, -1000, 1000, 0.01, "", "added to u", title="offset b")
+    half_width: float = num(1.0, 1e-3, 1000, 0.01, "", "C: P is defined on [-C, C]", gt=True, title="half width C")
     mode: Literal["mirror", "repeat", "zero"] = Field(
         "mirror", description="outside [-C, C]: mirror the tile at each border (seamless), repeat it "
                               "(needs P(-C) = P(C)), or zero")

@@ -6,7 +6,7 @@ import math
 from typing import Literal
 
 import numpy as np
-from pydantic import Field, model_validator
+from pydantic import ConfigDict, Field, model_validator
 
 from fogbank.kinds.kind import Kind, Layout, exponential
 from fogbank.kinds.rays import slide
@@ -15,13 +15,17 @@ from fogbank.model.fields import Direction, LayerBase, Position, num
 
 class Potential(LayerBase):
     """Biri 3.2.3, eq. 9: strength / (c + e r^2), r the distance to a point or a line."""
+    model_config = ConfigDict(title="Potential blob")
     kind: Literal["potential"] = "potential"
+    source = "Biri, Michelin & Arquès 2002, section 3.2.3, eq. 9"
+    summary = "A soft blob of fog round a point, or a long one along a line, thickest at its centre."
+    formula = r"\rho(\mathbf{x}) = \frac{a}{c + e\, r(\mathbf{x})^2}"
     shape: Literal["point", "line"] = "point"
     center: Position = Field((0.0, 5.0, 0.0), description="the point, or a point on the line, m")
     direction: Direction = Field((0.0, 1.0, 0.0), description="the line's direction (unused for a point)")
-    strength: float = num(1.0, 0, 1000, 0.01, "1/m", "numerator a")
-    c: float = num(20.0, 1e-3, 1e6, 0.1, "", "constant term c > 0", gt=True)
-    e: float = num(1.0, 1e-6, 1e3, 0.01, "1/m^2", "r^2 weight e > 0", gt=True)
+    strength: float = num(1.0, 0, 1000, 0.01, "1/m", "numerator a", title="strength a")
+    c: float = num(20.0, 1e-3, 1e6, 0.1, "", "constant term c > 0: the peak density is a / c", gt=True, title="constant c")
+    e: float = num(1.0, 1e-6, 1e3, 0.01, "1/m^2", "r^2 weight e > 0: larger is a tighter blob", gt=True, title="falloff e")
 
     @model_validator(mode="after")
     def _line_direction(self) -> "Potential":

@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Literal
 
 import numpy as np
-from pydantic import Field
+from pydantic import ConfigDict, Field
 
 from fogbank.kinds.kind import Kind, Layout, exponential
 from fogbank.kinds.rays import slide
@@ -14,10 +14,14 @@ from fogbank.model.fields import LayerBase, Position, num
 
 class Sphere(LayerBase):
     """Quilez: density * max(0, 1 - |x - center|^2 / radius^2)."""
+    model_config = ConfigDict(title="Fog sphere")
     kind: Literal["sphere"] = "sphere"
+    source = "Quilez, analytically integrated volumetric media"
+    summary = "A ball of fog, densest at its centre and gone at its edge, integrated in closed form."
+    formula = r"\rho(\mathbf{x}) = \rho \max\left(0,\ 1 - \frac{|\mathbf{x} - \mathbf{s}|^2}{R^2}\right)"
     center: Position = Field((0.0, 8.0, 0.0), description="m")
-    radius: float = num(15.0, 0.01, 1000, 0.1, "m", "", gt=True)
-    density: float = num(0.1, 0, 10, 0.001, "1/m", "density at the centre")
+    radius: float = num(15.0, 0.01, 1000, 0.1, "m", "the sphere's radius", gt=True, title="radius R")
+    density: float = num(0.1, 0, 10, 0.001, "1/m", "density at the centre", title="density ρ")
 
 
 def density(layer, x, t, env):

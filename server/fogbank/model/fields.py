@@ -8,7 +8,7 @@ in 1/m (optical depth per metre), colours as sRGB hex "#rrggbb".
 from __future__ import annotations
 
 import re
-from typing import Annotated, Any
+from typing import Annotated, Any, ClassVar
 
 from pydantic import AfterValidator, BeforeValidator, BaseModel, ConfigDict, Field
 
@@ -16,13 +16,31 @@ MAX_LAYERS = 16
 MAX_PARTICLES = 1024   # over all particle layers of a look (one texture row)
 
 
+# A slider is logarithmic when its range spans this many steps or more from a bound of
+# zero or above: 2% of a linear 0-10 slider is 0.2, most of a density's useful range.
+LOG_SPAN = 1000
+
+
 def num(default: float, lo: float, hi: float, step: float, unit: str = "", desc: str = "",
-        *, gt: bool = False) -> Any:
-    """A bounded number with the slider step and unit the page shows."""
+        *, gt: bool = False, title: str | None = None, scale: str | None = None,
+        group: str | None = None) -> Any:
+    """A bounded number with the slider step, unit and scale the page shows.
+
+    `scale` is "log" or "linear": by default "log" for a range of LOG_SPAN steps or more
+    that starts at zero or above, so the page and the schema state one scale. `title` is
+    the label (words, where the paper's symbol would mean nothing to a reader); `group`
+    the panel section it sits in when not its parent's."""
     bound = {"gt": lo} if gt else {"ge": lo}
+    if scale is None:
+        scale = "log" if lo >= 0 and (hi - lo) / step >= LOG_SPAN else "linear"
+    if scale not in ("log", "linear"):
+        raise ValueError(f"scale {scale!r}: 'log' or 'linear'")
+    extra: dict[str, Any] = {"step": step, "unit": unit, "scale": scale}
+    if group:
+        extra["group"] = group
     # strict: a JSON number only (an int is fine), never a boolean or a numeric string
-    return Field(default, le=hi, description=desc, strict=True, **bound,
-                 json_schema_extra={"step": step, "unit": unit})
+    return Field(default, le=hi, description=desc, strict=True, title=title, **bound,
+                 json_schema_extra=extra)
 
 
 COLOR_PATTERN = r"^#?[0-9a-fA-F]{6}$"
@@ -92,12 +110,30 @@ class Strict(BaseModel):
 
 def _kind_required(schema: dict[str, Any], cls: type) -> None:
     """`kind` picks a layer's class, so the JSON Schema requires it (a layer without one
-    matches no branch of the union)."""
+    matches no branch of the union). A kind's help (its source, a sentence on what it
+    does and its formula, as LaTeX and as MathML that browsers draw without a library)
+    goes with it, so the page shows what the model states."""
     if "kind" in schema.get("properties", {}):
         schema["required"] = sorted(set(schema.get("required", [])) | {"kind"})
+    if getattr(cls, "source", ""):
+        schema["source"] = cls.source
+        schema["summary"] = cls.summary
+        schema["formula"] = cls.formula
+        schema["formula_mathml"] = mathml(cls.formula)
+
+
+def mathml(latex: str) -> str:
+    """LaTeX -> MathML (display), drawn natively by the browser (no CDN, no fonts)."""
+    from latex2mathml.converter import convert
+    return convert(latex, display="block")
 
 
 class LayerBase(Strict):
+    """A fog layer. Each kind's class states `source` (the paper and section), `summary`
+    (what it does, in a sentence a newcomer reads) and `formula` (LaTeX)."""
     model_config = ConfigDict(**Strict.model_config, json_schema_extra=_kind_required)
+    source: ClassVar[str] = ""
+    summary: ClassVar[str] = ""
+    formula: ClassVar[str] = ""
     enabled: Bool = Field(True, description="a disabled layer is kept but not drawn")
     wind: Bool = Field(False, description="wind-sensitive: the density slides with wind * time")

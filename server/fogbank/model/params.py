@@ -14,13 +14,25 @@ import math
 from typing import Annotated, Literal, Union
 
 import numpy as np
-from pydantic import Field, model_validator
+from pydantic import ConfigDict, Field, model_validator
 
 from fogbank.kinds import KINDS
 from fogbank.model.fields import MAX_LAYERS, MAX_PARTICLES, POSITION_LIMIT, Bool, Color, Int, Position, Strict, num
+from fogbank.scene.bounds import CAMERA_BOUNDS, camera_bounds_schema
 
 
 MAX_PIXELS = 16_000_000
+
+# The page's panel sections, as an artist looks for things, in the order shown. Each
+# field names its section with `group` (an object's fields inherit its group).
+PANEL_GROUPS = ("Fog", "Layers", "Light", "Wind", "Distance and sky", "Blur", "Camera",
+                "Scene and quality")
+
+
+def grouped(name: str) -> dict:
+    if name not in PANEL_GROUPS:
+        raise ValueError(f"panel group {name!r}: one of {PANEL_GROUPS}")
+    return {"group": name}
 
 
 # ---------------------------------------------------------------- scene and camera
@@ -73,55 +85,69 @@ class NoiseBake(Strict):
 
 
 class Effects(Strict):
-    start_distance: float = num(0.0, 0, 10000, 1, "m", "no fog nearer than this")
+    start_distance: float = num(0.0, 0, 10000, 1, "m", "no fog nearer than this", group="Distance and sky")
     cutoff_distance: float = num(0.0, 0, 100000, 10, "m",
-                                 "points beyond this get no fog or all fog, by cutoff_mode (0 = off)")
+                                 "points beyond this get no fog or all fog, by cutoff_mode (0 = off)", group="Distance and sky")
     cutoff_mode: Literal["clear", "fog"] = Field(
-        "clear", description="beyond cutoff_distance: 'clear' shows points unfogged (Unreal's "
+        "clear", json_schema_extra=grouped("Distance and sky"), description="beyond cutoff_distance: 'clear' shows points unfogged (Unreal's "
                              "meaning, for skies), 'fog' hides them in the fog colour (Biri 2002, 4.2)")
-    max_opacity: float = num(1.0, 0, 1, 0.01, "", "fog never hides more than this")
-    sky_distance: float = num(800.0, 1, 100000, 10, "m", "how far a sky pixel's ray runs")
+    max_opacity: float = num(1.0, 0, 1, 0.01, "", "fog never hides more than this", group="Distance and sky")
+    sky_distance: float = num(800.0, 1, 100000, 10, "m", "how far a sky pixel's ray runs", group="Distance and sky")
     sky_affect: float = num(1.0, 0, 1, 0.01, "", "how much of its fog the sky shows (Godot's sky "
                             "affect): 1 = all of it, 0 = an unfogged sky; its T becomes "
-                            "1 - sky_affect (1 - T)")
-    scatter: float = num(0.6, 0, 10, 0.05, "", "sun in-scattering strength (Gawron 3.2)")
-    scatter_exponent: float = num(8.0, 0.1, 256, 0.5, "", "in-scattering falloff")
-    scatter_color: Color = Field("#ffffff", description="Gawron's ScatterColor, as a tint of the "
+                            "1 - sky_affect (1 - T)", group="Distance and sky")
+    scatter: float = num(0.6, 0, 10, 0.005, "", "sun in-scattering strength (Gawron 3.2)", group="Light")
+    scatter_exponent: float = num(8.0, 0.1, 256, 0.1, "", "in-scattering falloff", group="Light")
+    scatter_color: Color = Field("#ffffff", json_schema_extra=grouped("Light"), description="Gawron's ScatterColor, as a tint of the "
                                  "sunlight: in-scattered light = sun colour x intensity x this x scatter")
     scatter_start: float = num(0.0, 0, 10000, 10, "m", "Gawron eq. 5: ScatterStartDist, added to the "
-                               "view vector (each component) before it is normalised")
+                               "view vector (each component) before it is normalised", group="Light")
     phase: Literal["gawron", "henyey-greenstein"] = Field(
-        "gawron", description="in-scattering lobe: Gawron's max(0, cos)^scatter_exponent, or the "
+        "gawron", json_schema_extra=grouped("Light"), description="in-scattering lobe: Gawron's max(0, cos)^scatter_exponent, or the "
                               "Henyey-Greenstein phase function with anisotropy g (times 4 pi: 1 "
                               "in every direction when g = 0)")
     anisotropy: float = num(0.6, -0.95, 0.95, 0.01, "", "Henyey-Greenstein g: 0 scatters evenly, "
-                            "> 0 forward (a glow round the sun), < 0 back toward it")
+                            "> 0 forward (a glow round the sun), < 0 back toward it", group="Light")
     shafts: float = num(0.0, 0, 1, 0.05, "", "light shafts, SAMPLED (not exact): the in-scattered "
                         "sunlight is scaled toward the share of 16 jittered points along the view "
-                        "ray that the shadow map lights (0 = off, 1 = fully)")
+                        "ray that the shadow map lights (0 = off, 1 = fully)", group="Light")
     sun_through_fog: Bool = Field(
-        False, description="dim the sunlight on each surface by the fog between it and the sun: "
+        False, json_schema_extra=grouped("Light"), description="dim the sunlight on each surface by the fog between it and the sun: "
                            "the density layers' closed forms along the sun's direction for "
                            "sky_distance metres (shadows soften under dense fog)")
     blur: Literal["off", "single", "separate"] = Field(
-        "off", description="fog blur: off, fused with the composite, or separate passes")
-    blur_radius: float = num(3.0, 0, 16, 0.25, "px", "Gaussian sigma at full fog (at 720 px high)")
-    blur_exponent: float = num(1.0, 0.1, 8, 0.1, "", "sigma = radius * (1 - T)^exponent")
-    fog_scale: Literal[1, 2, 4] = Field(1, description="fog computed at 1/1, 1/2 or 1/4 size")
+        "off", json_schema_extra=grouped("Blur"), description="fog blur: off, fused with the composite, or separate passes")
+    blur_radius: float = num(3.0, 0, 16, 0.25, "px", "Gaussian sigma at full fog (at 720 px high)", group="Blur")
+    blur_exponent: float = num(1.0, 0.1, 8, 0.1, "", "sigma = radius * (1 - T)^exponent", group="Blur")
+    fog_scale: Literal[1, 2, 4] = Field(1, json_schema_extra=grouped("Scene and quality"),
+                                        description="fog computed at 1/1, 1/2 or 1/4 size: "
+                                                    "faster, softer at fog edges")
 
 
 class FogParams(Strict):
     """A whole look: scene, camera, time, wind, sun, fog colour and layers."""
-    scene: Literal["countryside", "calibration"] = "countryside"
-    camera: Camera = Field(default_factory=Camera)
+    # the page's sections and each scene's camera bounds go with the schema
+    model_config = ConfigDict(**Strict.model_config, json_schema_extra={
+        "groups": list(PANEL_GROUPS), "camera_bounds": camera_bounds_schema()})
+    scene: Literal[tuple(CAMERA_BOUNDS)] = Field(  # type: ignore[valid-type]
+        "countryside", json_schema_extra=grouped("Scene and quality"),
+        description="the land under the fog: 'countryside', or 'calibration' (a flat unlit "
+                    "ground and four boxes, for measuring)")
+    camera: Camera = Field(default_factory=Camera, json_schema_extra=grouped("Camera"))
     time: float = num(0.0, 0, 1e6, 0.1, "s", "simulation time")
-    wind: Wind = Field(default_factory=Wind)
-    sun: Sun = Field(default_factory=Sun)
-    fog_color: Color = "#c5ccd6"
-    density: float = num(1.0, 0, 20, 0.01, "", "global density: T becomes T^density")
-    layers: list[Layer] = Field(default_factory=list, max_length=MAX_LAYERS)
+    wind: Wind = Field(default_factory=Wind, json_schema_extra=grouped("Wind"))
+    sun: Sun = Field(default_factory=Sun, json_schema_extra=grouped("Light"))
+    fog_color: Color = Field("#c5ccd6", json_schema_extra=grouped("Fog"),
+                             description="the colour the fog hides things in")
+    density: float = num(1.0, 0, 20, 0.01, "", "global density: T becomes T^density",
+                         group="Fog", title="global density")
+    layers: list[Layer] = Field(default_factory=list, max_length=MAX_LAYERS,
+                                json_schema_extra=grouped("Layers"),
+                                description="the fog's layers: their optical depths add up")
     effects: Effects = Field(default_factory=Effects)
-    noise: NoiseBake = Field(default_factory=NoiseBake)
+    noise: NoiseBake = Field(default_factory=NoiseBake, json_schema_extra=grouped("Scene and quality"),
+                             description="the baked noise texture that noise and distance "
+                                         "layers sample")
 
     @model_validator(mode="after")
     def _particle_budget(self) -> "FogParams":

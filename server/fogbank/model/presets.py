@@ -45,6 +45,7 @@ def _presets() -> dict[str, dict[str, Any]]:
     return {
         "default": {
             "title": "Valley mist at sunrise",
+            "source": "fogbank's own mix: exponential height fog (Unreal, Filament), Biri et al. 2002 cosines and a point potential, Fischer's particles, Gawron's and Henyey-Greenstein's in-scattering",
             "description": "A low sun through ground mist pooled in the river valley (height fog), "
                            "drifting Biri cosine layers, denser air in the forest (a point "
                            "potential) and chimney smoke; Henyey-Greenstein in-scattering, the "
@@ -67,6 +68,7 @@ def _presets() -> dict[str, dict[str, Any]]:
         },
         "biri-fig6": {
             "title": "Biri et al. 2002, figure 6",
+            "source": "Biri, Michelin & Arquès, Real-Time Animation of Realistic Fog (2002): figure 6, section 3.2.1",
             "description": "Layers of mist from four cosine functions plus one constant (the "
                            "product term expanded into two cosines), 150 m per function unit: "
                            "dense in the valley, clear on the hilltops, tilted and drifting.",
@@ -75,6 +77,7 @@ def _presets() -> dict[str, dict[str, Any]]:
         },
         "biri-fig7": {
             "title": "Biri et al. 2002, figure 7",
+            "source": "Biri, Michelin & Arquès 2002: figure 7, section 3.2.2",
             "description": "Two fourth-degree polynomials {0.8, -1, 0, 0, 1} on X and Z, mirrored "
                            "at their tile borders (no seam), their minimum on the house: its middle "
                            "is clear, its ends in mist.",
@@ -88,6 +91,7 @@ def _presets() -> dict[str, dict[str, Any]]:
         },
         "biri-fig8": {
             "title": "Biri et al. 2002, figure 8",
+            "source": "Biri, Michelin & Arquès 2002: figure 8, section 3.2.3 (eq. 9)",
             "description": "Thin constant fog with four tight point potentials centred on trees: the mist "
                            "gathers around them.",
             "params": {"camera": {"position": (30.0, 35.0, 60.0), "yaw": 7.0, "pitch": -10.0, "fov": 55.0},
@@ -98,6 +102,7 @@ def _presets() -> dict[str, dict[str, Any]]:
         },
         "quilez-spheres": {
             "title": "Quilez: analytic fog spheres",
+            "source": "Inigo Quilez, analytically integrated volumetric media (no raymarching)",
             "description": "Spheres of fog, density 1 - r^2, integrated in closed form and "
                            "clipped by the depth buffer.",
             "params": {"camera": view, "layers": [
@@ -107,6 +112,7 @@ def _presets() -> dict[str, dict[str, Any]]:
         },
         "fischer-fog": {
             "title": "Fischer: particle fog",
+            "source": "Cameron Fischer, Clouds, Fog, and Smoke",
             "description": "Ground fog over the river from 400 free particles born along it "
                            "(life 64-128 steps, max opacity 0.2 each), drifting with the wind.",
             "params": {"camera": view, "time": 40.0, "wind": {"direction": 100.0, "speed": 0.8},
@@ -119,6 +125,7 @@ def _presets() -> dict[str, dict[str, Any]]:
         },
         "fischer-smoke": {
             "title": "Fischer: chimney smoke",
+            "source": "Cameron Fischer, Clouds, Fog, and Smoke",
             "description": "Smoke from a few particles (life 8-16 steps, opacity near 1) out of "
                            "the house's chimney, bent by the wind.",
             "params": {"camera": house_view, "time": 12.0, "wind": {"direction": 80.0, "speed": 2.0},
@@ -126,6 +133,7 @@ def _presets() -> dict[str, dict[str, Any]]:
         },
         "perlin-fog": {
             "title": "Perlin fog with height falloff",
+            "source": "Perlin Fog (course project write-up)",
             "description": "The course write-up's fog: baked fractal Perlin noise, "
                            "f = exp(-rho d n), n -> n dY^2 / 2 + 0.001, drifting with the wind.",
             "params": {"camera": {"position": (-30.0, 60.0, 120.0), "yaw": 12.0, "pitch": -20.0, "fov": 60.0},
@@ -134,6 +142,7 @@ def _presets() -> dict[str, dict[str, Any]]:
         },
         "fog-volumes": {
             "title": "Fog volumes: a box and an ellipsoid",
+            "source": "fogbank: closed-form chords through a box and an ellipsoid (the sphere's profile of Quilez)",
             "description": "A rotated box of constant fog lying along the river at the bridge "
                            "(tau = rho times the chord, slab method) and an ellipsoidal cloud over "
                            "the forest (the sphere's 1 - r^2 profile in the ellipsoid's metric), "
@@ -148,6 +157,7 @@ def _presets() -> dict[str, dict[str, Any]]:
         },
         "carved-clearing": {
             "title": "A clearing carved out of the fog",
+            "source": "fogbank: a negative-density ellipsoid subtracted from height fog",
             "description": "Dense valley fog with an ellipsoid of negative density around the "
                            "house (Biri's subtracted objects, Godot's negative FogVolume): the "
                            "fog is carved away there, and the total optical depth never drops "
@@ -160,6 +170,7 @@ def _presets() -> dict[str, dict[str, Any]]:
         },
         "gawron-distance": {
             "title": "Gawron & Boryczka 2018: distance fog",
+            "source": "Gawron & Boryczka, Heterogeneous Fog Generated with the Effect of Light Scattering and Blur (2018): sections 3.1-3.3",
             "description": "Distance fog with noise-varied density, an orange scatter colour of "
                            "its own in the sun's direction (eqs. 5-8, with the scatter start "
                            "distance), its noise drifting on its own (not with the wind) and a "

@@ -349,6 +349,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         for name, p in P.presets().items():
             fog = FogParams.model_validate(P.preset_dict(name))
             out.append({"name": name, "title": p["title"], "description": p["description"],
+                        "source": p["source"],
                         "query": encode_url(fog), "params": P.preset_dict(name)})
         return out
 

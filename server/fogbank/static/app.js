@@ -5,6 +5,7 @@
 
 import { Stream } from "./stream.js";
 import { Controls, buildPatch } from "./controls.js";
+import { UndoStack } from "./undo.js";
 import { CameraInput } from "./camera.js";
 import { store, version, playing, simTime } from "./store.js";
 
@@ -55,8 +56,59 @@ function setInteract(active) {
   stream.send({ type: "interact", active });
 }
 
+// ------------------------------------------------------------------ camera bounds
+// the scene's bounds for the eye (the schema's camera_bounds): drags, flights and typed
+// positions stay within them
+const cameraBounds = () => schema.camera_bounds[store.get().params?.scene || "countryside"];
+function clampCamera(camera) {
+  if (!camera.position) return camera;
+  const b = cameraBounds();
+  const p = camera.position.map((v, i) => Math.min(b.max[i], Math.max(b.min[i], v)));
+  if (p.some((v, i) => v !== camera.position[i]) && !store.get().interacting) {
+    toast(`The camera stays within the ${store.get().params.scene} scene: x ${b.min[0]} to ${b.max[0]}, ` +
+      `y ${b.min[1]} to ${b.max[1]}, z ${b.min[2]} to ${b.max[2]} m`);
+  }
+  return { ...camera, position: p };
+}
+
+// ------------------------------------------------------------------ undo and redo
+// Look changes (edits, presets, resets, layers added) are undoable; camera drags are not
+// (the camera has its own reset). Edits of one field in quick succession are one step.
+const looks = new UndoStack();
+function remember(path, touchesCamera) {
+  const s = store.get();
+  if (s.params) looks.record(s.params, path.join("."), touchesCamera);
+  showHistory();
+}
+function restore(entry) {
+  if (!entry) return;
+  const s = store.get();
+  // the animation keeps its time; the camera goes back only with a change that moved it
+  const { time, ...look } = entry.params;
+  const params = entry.camera ? look : { ...look, camera: s.params.camera };
+  store.set({ params: { ...s.params, ...params }, redrawNext: true });
+  stream.send({ type: "params", params });
+  showHistory();
+}
+function showHistory() {
+  $("undo").disabled = !looks.canUndo();
+  $("redo").disabled = !looks.canRedo();
+}
+$("undo").addEventListener("click", () => restore(looks.undo(store.get().params)));
+$("redo").addEventListener("click", () => restore(looks.redo(store.get().params)));
+addEventListener("keydown", (e) => {
+  if (!(e.ctrlKey || e.metaKey) || e.key.toLowerCase() !== "z") return;
+  const t = e.target;
+  // a text field being edited keeps its own undo
+  if (t instanceof HTMLInputElement && (t.type === "text" || t.type === "number") && t.value !== t.defaultValue) return;
+  e.preventDefault();
+  restore(e.shiftKey ? looks.redo(store.get().params) : looks.undo(store.get().params));
+});
+
 // ------------------------------------------------------------------ controls
 const controls = new Controls($("controls"), schema, (path, value) => {
+  remember(path, path[0] === "camera");
+  if (path.join(".") === "camera.position") value = clampCamera({ position: value }).position;
   // a list added to, removed from or reordered, or a layer toggled, changes the form
   const structural = (Array.isArray(value) && (value.length === 0 || typeof value[0] === "object"))
     || path.at(-1) === "enabled";
@@ -71,6 +123,7 @@ const controls = new Controls($("controls"), schema, (path, value) => {
   queueFlush();
 }, addLayer);
 controls.onChange.interact = setInteract;
+controls.ctx.cameraBounds = cameraBounds;
 
 // "Add layer": the server suggests one that suits the look (placed in front of the
 // camera, thin enough never to white out the view); each click appends to the list as it
@@ -91,6 +144,7 @@ async function addLayer(path, kind) {
 
 // ------------------------------------------------------------------ camera
 new CameraInput(canvas, () => store.get().params.camera, (patch) => {
+  patch = clampCamera(patch);
   store.update((s) => ({
     params: { ...s.params, camera: { ...s.params.camera, ...patch } },
     pendingCamera: { ...(s.pendingCamera || {}), ...patch },
@@ -160,8 +214,42 @@ store.subscribe((s, prev) => {
   if (s.lastFrame !== prev.lastFrame) showFrame(s);
 });
 
+// The preset a look started from: the one chosen, or for a link, the preset it matches
+// or shares the most of its query with. "Reset to preset" and "Reset camera" go back to it.
+function basePreset(query) {
+  const keys = new Set(lookOf(query).split("&"));
+  let best = presets[0], most = -1;
+  for (const p of presets) {
+    const shared = lookOf(p.query).split("&").filter((kv) => keys.has(kv)).length;
+    if (shared > most) { best = p; most = shared; }
+  }
+  return best;
+}
+function showAbout(c) {
+  const match = presets.find((p) => lookOf(p.query) === lookOf(c.query));
+  if (match || !store.get().base) store.set({ base: (match || basePreset(c.query)).name });
+  const base = presets.find((p) => p.name === store.get().base);
+  $("about-title").textContent = match ? match.title : `Custom look, from “${base.title}”`;
+  $("about-text").textContent = base.description;
+  $("about-source").textContent = `Source: ${base.source}`;
+}
+$("reset-look").addEventListener("click", () => {
+  const base = presets.find((p) => p.name === store.get().base);
+  remember(["preset"], true);
+  store.set({ redrawNext: true });
+  stream.send({ type: "query", query: base.query });
+});
+$("reset-camera").addEventListener("click", () => {
+  const base = presets.find((p) => p.name === store.get().base);
+  remember(["camera"], true);
+  const camera = structuredClone(base.params.camera);
+  store.update((s) => ({ params: { ...s.params, camera } }));
+  stream.send({ type: "camera", camera });
+});
+
 // the URL and the toolbar show the look the server last confirmed
 function showConfirmed(c) {
+  showAbout(c);
   const q = c.query === "v=1" ? "" : c.query;
   if (location.search.slice(1) !== q) history.replaceState(null, "", q ? `?${q}` : location.pathname);
   $("play").textContent = c.playing ? "Pause" : "Play";
@@ -198,7 +286,8 @@ $("preset").append(new Option("(custom)", ""));
 $("preset").addEventListener("change", () => {
   const p = presets.find((x) => x.name === $("preset").value);
   if (!p) return;
-  store.set({ redrawNext: true });
+  remember(["preset"], true);
+  store.set({ redrawNext: true, base: p.name });
   stream.send({ type: "query", query: p.query });
 });
 $("play").addEventListener("click", () => stream.send({ type: "play", playing: !playing(store.get()) }));

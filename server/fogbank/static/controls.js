@@ -16,8 +16,10 @@ function resolve(schema, node) {
   return node;
 }
 
+// a field's label: its title (words, or the pydantic title of its name), sentence case
 function label(name, node) {
-  return (node && node.title) || name.replace(/_/g, " ");
+  const t = String((node && node.title) || name).replace(/_/g, " ");
+  return t.charAt(0).toUpperCase() + t.slice(1);
 }
 
 function el(tag, attrs = {}, ...children) {
@@ -31,9 +33,69 @@ function el(tag, attrs = {}, ...children) {
   return e;
 }
 
+// The slider's scale, as the schema states it: "log" sliders map their 0..LOG_STEPS
+// positions onto lo + knee ((span/knee + 1)^t - 1), t = position / LOG_STEPS, with the
+// field's step as the knee: as fine as one step near the bottom, a constant ratio above.
+const LOG_STEPS = 1000;
+export function sliderScale(node, lo, hi) {
+  const step = Number(node.step) || (hi - lo) / 1000;
+  if (node.scale !== "log") {
+    return { min: lo, max: hi, toValue: (p) => p, toPos: (v) => v };
+  }
+  const k = Math.log((hi - lo) / step + 1);
+  return {
+    min: 0, max: LOG_STEPS,
+    toValue: (p) => lo + step * Math.expm1((p / LOG_STEPS) * k),
+    toPos: (v) => (Math.log1p(Math.max(0, v - lo) / step) / k) * LOG_STEPS,
+  };
+}
+
+// A slider's value as the field takes it: integers whole, log values to three
+// significant figures, linear ones to the step; inside the bounds (an exclusive bound
+// by a hair).
+function tidy(v, node, lo, hi, integer) {
+  const step = Number(node.step) || 0;
+  if (integer) v = Math.round(v);
+  else if (node.scale === "log") v = Number(v.toPrecision(3));
+  else if (step) v = Number((Math.round((v - lo) / step) * step + lo).toFixed(12));
+  v = Math.min(hi, Math.max(lo, v));
+  if (node.exclusiveMinimum !== undefined && v <= node.exclusiveMinimum) {
+    v = Number((node.exclusiveMinimum + (step || Math.abs(node.exclusiveMinimum) * 1e-3 || 1e-6)).toPrecision(6));
+  }
+  return v;
+}
+
+// The help line under a field: its meaning, unit and range (shown on hover and focus).
+function helpText(node, lo, hi) {
+  const parts = [];
+  if (node.description) parts.push(node.description);
+  if (node.unit) parts.push(`unit: ${node.unit}`);
+  if (lo !== undefined && hi !== undefined) {
+    parts.push(`${node.exclusiveMinimum !== undefined ? "above" : "from"} ${lo} to ${hi}` +
+      (node.scale === "log" ? " (log slider)" : ""));
+  }
+  if (node.default !== undefined) parts.push(`default ${Array.isArray(node.default) ? node.default.join(", ") : node.default}; double-click to reset`);
+  return parts.join(" · ");
+}
+
+function withHelp(wrap, node, lo, hi) {
+  const text = helpText(node, lo, hi);
+  if (text) wrap.append(el("small", { class: "help" }, text));
+  return wrap;
+}
+
+// double-clicking a field's label (or slider) sets it back to its default
+function resettable(target, path, node, onChange) {
+  if (node.default === undefined) return;
+  target.addEventListener("dblclick", (e) => {
+    e.preventDefault();
+    onChange(path, structuredClone(node.default));
+  });
+}
+
 function numberControl(path, node, value, onChange, integer) {
   const id = `c${uid++}`;
-  const min = node.minimum ?? node.exclusiveMinimum ?? (node.exclusiveMinimum === 0 ? 0 : undefined);
+  const min = node.minimum ?? node.exclusiveMinimum;
   const max = node.maximum ?? node.exclusiveMaximum;
   const step = node.step ?? (integer ? 1 : "any");
   const wrap = el("div", { class: "field number" });
@@ -45,30 +107,71 @@ function numberControl(path, node, value, onChange, integer) {
   if (max !== undefined) num.max = String(max);
   const unit = el("span", { class: "unit", id: `${id}-unit` }, node.unit || "");
   wrap.append(lab);
-  let range = null;
-  if (min !== undefined && max !== undefined && isFinite(min) && isFinite(max) && max - min <= 1e5) {
-    range = el("input", { type: "range", min: String(min), max: String(max), step: String(step),
-      value: String(value), "aria-label": `${label(path.at(-1), node)} slider`, tabindex: "-1" });
-    range.addEventListener("input", () => { num.value = range.value; onChange(path, Number(range.value)); });
-    range.addEventListener("pointerdown", () => onChange.interact?.(true));
-    range.addEventListener("pointerup", () => onChange.interact?.(false));
+  resettable(lab, path, node, onChange);
+  if (min !== undefined && max !== undefined && isFinite(min) && isFinite(max) && max - min <= 1e7) {
+    const sc = sliderScale(node, min, max);
+    const range = el("input", { type: "range", min: String(sc.min), max: String(sc.max), step: "any",
+      value: String(sc.toPos(value)), "aria-label": `${label(path.at(-1), node)} slider`, tabindex: "-1",
+      "data-scale": node.scale || "linear" });
+    range.style.touchAction = "none";
+    // The page drives the slider itself: a press jumps to the pointer, a drag moves by
+    // the pointer's travel, and with Shift held by a tenth of it (fine drag).
+    range.addEventListener("pointerdown", (e) => {
+      if (e.button !== 0) return;
+      e.preventDefault();
+      range.setPointerCapture(e.pointerId);
+      const rect = range.getBoundingClientRect();
+      const span = sc.max - sc.min;
+      let pos = Number(range.value);
+      if (!e.shiftKey) pos = sc.min + span * Math.min(1, Math.max(0, (e.clientX - rect.left) / rect.width));
+      let lastX = e.clientX;
+      const apply = () => {
+        const v = tidy(sc.toValue(pos), node, min, max, integer);
+        range.value = String(pos);
+        if (num.value !== String(v)) { num.value = String(v); onChange(path, v); }
+      };
+      const move = (ev) => {
+        pos = Math.min(sc.max, Math.max(sc.min, pos + (ev.shiftKey ? 0.1 : 1) * (ev.clientX - lastX) / rect.width * span));
+        lastX = ev.clientX;
+        apply();
+      };
+      const up = () => {
+        range.removeEventListener("pointermove", move);
+        range.removeEventListener("pointerup", up);
+        range.removeEventListener("pointercancel", up);
+        onChange.interact?.(false);
+      };
+      range.addEventListener("pointermove", move);
+      range.addEventListener("pointerup", up);
+      range.addEventListener("pointercancel", up);
+      onChange.interact?.(true);
+      apply();
+    });
+    range.toValueText = (v) => String(sc.toPos(Number(v)));
+    resettable(range, path, node, onChange);
     wrap.append(range);
   }
   num.addEventListener("change", () => {
     if (num.value === "" || !isFinite(Number(num.value))) return;
-    if (range) range.value = num.value;
+    const range = wrap.querySelector('input[type="range"]');
+    if (range) range.value = range.toValueText(num.value);
     onChange(path, integer ? Math.round(Number(num.value)) : Number(num.value));
   });
   wrap.append(num, unit);
-  return wrap;
+  return withHelp(wrap, node, min, max);
 }
 
-function vectorControl(path, node, value, onChange) {
-  const wrap = el("fieldset", { class: "field vector" }, el("legend", {}, label(path.at(-1), node)));
+function vectorControl(path, node, value, onChange, ctx) {
+  const legend = el("legend", {}, label(path.at(-1), node));
+  const wrap = el("fieldset", { class: "field vector" }, legend);
   if (node.description) wrap.title = node.description;
+  resettable(legend, path, node, onChange);
+  // the camera's position: each axis within the scene's bounds (the schema's camera_bounds)
+  const bounds = path.join(".") === "camera.position" ? ctx.cameraBounds?.() : null;
   const inputs = value.map((v, i) => {
     const inp = el("input", { type: "number", step: "any", value: String(v),
       "aria-label": `${label(path.at(-1), node)} ${"xyzw"[i] ?? i}`, "data-path": `${path.join(".")}.${i}` });
+    if (bounds) { inp.min = String(bounds.min[i]); inp.max = String(bounds.max[i]); }
     inp.addEventListener("change", () => {
       const vals = inputs.map((x) => Number(x.value));
       if (vals.every(isFinite)) onChange(path, vals);
@@ -76,7 +179,9 @@ function vectorControl(path, node, value, onChange) {
     return inp;
   });
   wrap.append(...inputs);
-  return wrap;
+  const help = bounds ? { ...node, description: `${node.description || ""}; in this scene x ${bounds.min[0]} to ${bounds.max[0]}, ` +
+    `y ${bounds.min[1]} to ${bounds.max[1]}, z ${bounds.min[2]} to ${bounds.max[2]} m` } : node;
+  return withHelp(wrap, help);
 }
 
 function listOfNumbersControl(path, node, value, onChange) {
@@ -87,8 +192,9 @@ function listOfNumbersControl(path, node, value, onChange) {
     const vals = inp.value.split(/[,\s]+/).filter(Boolean).map(Number);
     if (vals.length && vals.every(isFinite)) onChange(path, vals);
   });
-  return el("div", { class: "field text" }, el("label", { for: id, title: node.description || "" },
-    label(path.at(-1), node)), inp);
+  const lab = el("label", { for: id, title: node.description || "" }, label(path.at(-1), node));
+  resettable(lab, path, node, onChange);
+  return withHelp(el("div", { class: "field text" }, lab, inp), node);
 }
 
 function selectControl(path, node, options, value, onChange) {
@@ -99,8 +205,9 @@ function selectControl(path, node, options, value, onChange) {
     const raw = sel.value;
     onChange(path, typeof value === "number" ? Number(raw) : raw);
   });
-  return el("div", { class: "field select" }, el("label", { for: id, title: node.description || "" },
-    label(path.at(-1), node)), sel);
+  const lab = el("label", { for: id, title: node.description || "" }, label(path.at(-1), node));
+  resettable(lab, path, node, onChange);
+  return withHelp(el("div", { class: "field select" }, lab, sel), node);
 }
 
 function field(schema, path, node, value, onChange, ctx) {
@@ -114,8 +221,8 @@ function field(schema, path, node, value, onChange, ctx) {
     const id = `c${uid++}`;
     const cb = el("input", { id, type: "checkbox", checked: !!value, "data-path": path.join(".") });
     cb.addEventListener("change", () => onChange(path, cb.checked));
-    return el("div", { class: "field check" }, cb, el("label", { for: id, title: node.description || "" },
-      label(path.at(-1), node)));
+    return withHelp(el("div", { class: "field check" }, cb, el("label", { for: id, title: node.description || "" },
+      label(path.at(-1), node))), node);
   }
   if (node.type === "number" || node.type === "integer") {
     return numberControl(path, node, value, onChange, node.type === "integer");
@@ -124,9 +231,11 @@ function field(schema, path, node, value, onChange, ctx) {
     const id = `c${uid++}`;
     const inp = el("input", { id, type: "color", value, "data-path": path.join(".") });
     inp.addEventListener("input", () => onChange(path, inp.value));
-    return el("div", { class: "field color" }, el("label", { for: id }, label(path.at(-1), node)), inp);
+    const lab = el("label", { for: id, title: node.description || "" }, label(path.at(-1), node));
+    resettable(lab, path, node, onChange);
+    return withHelp(el("div", { class: "field color" }, lab, inp), node);
   }
-  if (node.type === "array" && node.prefixItems) return vectorControl(path, node, value, onChange);
+  if (node.type === "array" && node.prefixItems) return vectorControl(path, node, value, onChange, ctx);
   if (node.type === "array") {
     const items = node.items || {};
     if (items.type === "number") return listOfNumbersControl(path, node, value, onChange);
@@ -165,7 +274,7 @@ function listControl(schema, path, node, value, onChange, ctx) {
   const set = (next) => onChange(path, next);
   value.forEach((item, i) => {
     const sub = itemSchema(schema, node, item);
-    const name = item.kind ? `${i + 1}. ${item.kind}` : `${i + 1}`;
+    const name = item.kind ? `${i + 1}. ${sub.title || item.kind}` : `${label(path.at(-1), node).replace(/s$/, "")} ${i + 1}`;
     const gpath = [...path, i];
     const det = el("details", { class: "item", open: ctx.openGroups.has(gpath.join(".")) });
     det.addEventListener("toggle", () => {
@@ -188,6 +297,7 @@ function listControl(schema, path, node, value, onChange, ctx) {
       btn("↓", "Move down", () => set(swap(value, i, i + 1)), i === value.length - 1),
       btn("✕", "Remove", () => set(value.filter((_, j) => j !== i))));
     det.append(el("summary", {}, el("span", { class: "name" }, name), tools));
+    if (sub.source) det.append(kindHelp(sub));
     for (const [fname, fnode] of Object.entries(sub.properties || {})) {
       if (fname === "enabled") continue;
       const f = field(schema, [...gpath, fname], fnode, item[fname], onChange, ctx);
@@ -199,9 +309,15 @@ function listControl(schema, path, node, value, onChange, ctx) {
   const add = el("div", { class: "add" });
   if (node.items.discriminator) {
     const id = `c${uid++}`;
-    const kinds = Object.keys(node.items.discriminator.mapping);
+    // the kinds in the registry's order (the union's), not the mapping's alphabetical one
+    const order = (node.items.oneOf || []).map((o) => o.$ref);
+    const mapping = node.items.discriminator.mapping;
+    const kinds = Object.keys(mapping).sort((a, b) => order.indexOf(mapping[a]) - order.indexOf(mapping[b]));
     const sel = el("select", { id });
-    for (const k of kinds) sel.append(el("option", { value: k }, k));
+    for (const k of kinds) {
+      const ks = resolve(schema, { $ref: node.items.discriminator.mapping[k] });
+      sel.append(el("option", { value: k, title: ks.summary || "" }, ks.title || k));
+    }
     if (ctx.addKind) sel.value = ctx.addKind;   // the kind last chosen survives a redraw
     sel.addEventListener("change", () => { ctx.addKind = sel.value; });
     const b = el("button", { type: "button", disabled: value.length >= max }, "Add layer");
@@ -223,6 +339,16 @@ function listControl(schema, path, node, value, onChange, ctx) {
   return box;
 }
 
+// What a layer kind is: a sentence, its formula (MathML from the schema, drawn by the
+// browser) and its source.
+export function kindHelp(sub) {
+  const box = el("div", { class: "kind-help" }, el("p", { class: "summary" }, sub.summary));
+  const formula = el("div", { class: "formula", "aria-label": `formula: ${sub.formula}` });
+  formula.innerHTML = sub.formula_mathml;   // the server's own schema, not user text
+  box.append(formula, el("p", { class: "source" }, `Source: ${sub.source}`));
+  return box;
+}
+
 function swap(list, i, j) {
   const out = list.slice();
   [out[i], out[j]] = [out[j], out[i]];
@@ -236,7 +362,7 @@ export class Controls {
     this.form = form;
     this.schema = schema;
     this.onChange = onChange;
-    this.ctx = { openGroups: new Set(["layers.0"]), addLayer };
+    this.ctx = { openGroups: new Set(["Fog", "Layers", "Wind", "layers.0"]), addLayer };
   }
 
   // open the group or list item at `path` (a dotted path) when it is next drawn
@@ -255,16 +381,55 @@ export class Controls {
     // keep the focused control's focus across a rebuild
     const active = document.activeElement;
     const focusPath = active && this.form.contains(active) ? active.dataset.path : null;
-    const top = resolve(this.schema, this.schema);
     this.form.replaceChildren();
-    for (const [name, sub] of Object.entries(top.properties)) {
-      if (SKIP.has(name)) continue;
-      const f = field(this.schema, [name], sub, value[name], this.onChange, this.ctx);
-      if (!f) continue;
-      if (f.tagName === "DETAILS" && (name === "wind" || name === "layers")) f.open = true;
-      this.form.append(f);
+    for (const [name, box] of this.sections(value)) {
+      if (box.childElementCount > 1) this.form.append(box);
+      else console.warn(`panel section ${name} is empty`);
     }
     if (focusPath) this.form.querySelector(`[data-path="${CSS.escape(focusPath)}"]`)?.focus();
+  }
+
+  // The panel's sections (the schema's `groups`, in order), each field placed in the
+  // section its `group` names; an object's fields go where the object goes, their labels
+  // prefixed by its name when the section is not named for it ("sun azimuth" in Light).
+  sections(value) {
+    const top = resolve(this.schema, this.schema);
+    const boxes = new Map();
+    const ctx = this.ctx;
+    const section = (name) => {
+      if (!boxes.has(name)) {
+        const box = el("details", { class: "group section", open: ctx.openGroups.has(name),
+          "data-section": name });
+        box.addEventListener("toggle", () => {
+          if (box.open) ctx.openGroups.add(name); else ctx.openGroups.delete(name);
+        });
+        box.append(el("summary", {}, name));
+        boxes.set(name, box);
+      }
+      return boxes.get(name);
+    };
+    for (const g of this.schema.groups || []) section(g);
+    const place = (path, prop, v, group, prefix) => {
+      const node = resolve(this.schema, prop) || {};
+      const g = prop.group || node.group || group || "Scene and quality";
+      if ((node.type === "object" || node.properties) && !node.prefixItems) {
+        const own = prop.group && prop.group.toLowerCase() !== path.at(-1);
+        for (const [name, sub] of Object.entries(node.properties || {})) {
+          place([...path, name], sub, v?.[name], g, own ? path.at(-1) : null);
+        }
+        return;
+      }
+      const own = prop.title || node.title || path.at(-1).replace(/_/g, " ");
+      const shown = { ...prop, title: prefix ? `${prefix[0].toUpperCase()}${prefix.slice(1)} ${own}` : own };
+      if (prop.description === undefined && node.description) shown.description = node.description;
+      const f = field(this.schema, path, shown, v, this.onChange, ctx);
+      if (f) section(g).append(f);
+    };
+    for (const [name, sub] of Object.entries(top.properties)) {
+      if (SKIP.has(name)) continue;
+      place([name], sub, value[name], null, null);
+    }
+    return boxes;
   }
 
   // Set every control to `value` in place (a camera dragged, a look confirmed), except the
@@ -283,7 +448,10 @@ export class Controls {
       const text = Array.isArray(v) ? v.join(", ") : String(v);
       if (e.value !== text) e.value = text;
       const range = e.parentElement?.querySelector('input[type="range"]');
-      if (range && e.type === "number" && range.value !== text) range.value = text;
+      if (range && e.type === "number") {
+        const pos = range.toValueText(text);
+        if (range.value !== pos) range.value = pos;
+      }
     }
   }
 }

@@ -39,6 +39,7 @@ export const store = createStore({
   pendingCamera: null,  // camera patch waiting for the next animation frame
   flushQueued: false,   // an animation frame will send the pending patches
   unsent: null,         // params patch made while disconnected, sent on reconnect
+  base: null,           // the preset the look started from (Reset to preset, Reset camera)
 });
 
 // Values derived from the state (no second copy is kept).
