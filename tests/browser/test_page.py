@@ -463,3 +463,26 @@ def test_adding_layers_counts_every_click_opens_them_and_never_whites_out(server
     assert page.locator("details.item[open]").count() >= 5
     assert page.errors == []
     page.context.close()
+
+
+@pytest.mark.parametrize("w,h,dpr", [(600, 360, 2), (1920, 1080, 2)])
+def test_the_stream_follows_the_canvas_times_its_pixel_ratio_up_to_a_cap(server, browser, w, h, dpr):
+    """Finding 7: the 540p stream was soft on large screens. By default the stream has the
+    canvas's device pixels (CSS size x devicePixelRatio), scaled down to 1280x720's pixels
+    at most, in the canvas's shape."""
+    ctx = browser.new_context(viewport={"width": w, "height": h}, device_scale_factor=dpr, bypass_csp=True)
+    page = ctx.new_page()
+    page.goto(server.url + "/?v=1&play=0")
+    wait_frames(page, 1)
+    if page.locator("#panel").is_visible():
+        page.locator("#toggle-panel").click()
+    stage = page.locator("#stage").bounding_box()
+    cw, ch = stage["width"] * dpr, stage["height"] * dpr
+    scale = min(1.0, (1280 * 720 / (cw * ch)) ** 0.5, 1920 / cw, 1080 / ch)
+    want = (round(cw * scale / 2) * 2, round(ch * scale / 2) * 2)
+    page.wait_for_function(f"document.getElementById('view').width === {want[0]}"
+                           f" && document.getElementById('view').height === {want[1]}", timeout=30000)
+    assert want[0] * want[1] <= 1280 * 720 + 2 * (want[0] + want[1])
+    if w < 1000:
+        assert want == (round(cw / 2) * 2, round(ch / 2) * 2)       # a small view: every device pixel
+    ctx.close()

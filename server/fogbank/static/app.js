@@ -350,12 +350,29 @@ $("toggle-panel").addEventListener("click", () => {
 });
 addEventListener("resize", debounce(() => { sendView(); showViewSize(); }, 150));
 
-function sendView() {
+// The stream's size. "auto": the canvas's own device pixels (its CSS size times
+// devicePixelRatio, in the view's shape), scaled down to at most STREAM_PIXELS; or a
+// chosen height. The cap is 1280x720's pixels: what the server streams smoothly (docs/bench.md).
+const STREAM_PIXELS = 1280 * 720;
+const even = (v) => Math.max(16, Math.round(v / 2) * 2);
+function viewSize() {
   const stage = $("stage");
   const aspect = Math.max(0.5, Math.min(3, stage.clientWidth / Math.max(1, stage.clientHeight)));
-  let height = Number($("stream-size").value);
-  let width = Math.round(height * aspect / 2) * 2;
-  if (width > 1920) { width = 1920; height = Math.round(1920 / aspect / 2) * 2; }
+  const choice = $("stream-size").value;
+  if (choice === "auto") {
+    const dpr = window.devicePixelRatio || 1;
+    let w = stage.clientWidth * dpr, h = stage.clientHeight * dpr;
+    if (w / h > aspect) w = h * aspect; else h = w / aspect;
+    const scale = Math.min(1, Math.sqrt(STREAM_PIXELS / (w * h)), 1920 / w, 1080 / h);
+    return [even(w * scale), even(h * scale)];
+  }
+  let height = Number(choice);
+  let width = even(height * aspect);
+  if (width > 1920) { width = 1920; height = even(1920 / aspect); }
+  return [width, height];
+}
+function sendView() {
+  const [width, height] = viewSize();
   stream.setView({ width, height, fps: 60, quality: 80 });
 }
 
