@@ -486,3 +486,44 @@ def test_the_stream_follows_the_canvas_times_its_pixel_ratio_up_to_a_cap(server,
     if w < 1000:
         assert want == (round(cw / 2) * 2, round(ch / 2) * 2)       # a small view: every device pixel
     ctx.close()
+
+
+def test_views_that_teach_replace_the_frame_and_show_their_scale(server, browser):
+    """The view switch: transmittance (grey frames), one layer's optical depth (the layer
+    menu lists the look's layers), and analytic - raymarch with its max |dT| in the legend,
+    as the server's view_stats said; back to the look."""
+    stats = []
+
+    def listen(page):
+        page.on("websocket", lambda ws: ws.on("framereceived", lambda m: stats.append(json.loads(m))
+                                              if isinstance(m, str) and '"view_stats"' in m else None))
+
+    page = new_page(browser, server.url + "/?v=1&play=0", before=listen)
+    wait_frames(page, 1)
+    page.select_option("#show", "transmittance")
+    page.wait_for_function("window.fogbank.store.get().viewStats?.show === 'transmittance'"
+                           " && window.fogbank.store.get().lastFrame?.frame >= window.fogbank.store.get().viewStats.frame")
+    time.sleep(0.5)
+    px = canvas_pixels(page)
+    assert np.abs(px[..., 0] - px[..., 2]).mean() < 2          # grey: T, not the shaded look
+    assert page.locator("#legend-label").inner_text() == "transmittance T"
+    page.select_option("#show", "optical_depth")
+    assert page.locator("#show-layer").is_visible()
+    layers = page.evaluate("window.fogbank.store.get().params.layers.map((l) => l.kind)")
+    assert page.eval_on_selector_all("#show-layer option", "os => os.map(o => o.textContent)") == \
+        [f"{i + 1}. {k}" for i, k in enumerate(layers)]
+    page.select_option("#show-layer", "1")
+    page.wait_for_function("window.fogbank.store.get().viewStats?.show === 'optical_depth'"
+                           " && window.fogbank.store.get().viewStats.layer === 1")
+    assert f"layer 2 ({layers[1]})" in page.locator("#legend-stats").inner_text()
+    page.select_option("#show", "difference")
+    page.wait_for_function("window.fogbank.store.get().viewStats?.show === 'difference'")
+    last = [m for m in stats if m["show"] == "difference"][-1]
+    text = page.locator("#legend-stats").inner_text()
+    assert f"max |ΔT| {last['max_abs_dT']:.2e}".replace("e-0", "e-") in text or \
+        f"max |ΔT| {last['max_abs_dT']:.3g}" in text
+    assert last["max_abs_dT"] < 1e-3        # the default look's closed forms against 256 steps
+    page.select_option("#show", "shaded")
+    page.wait_for_function("document.getElementById('legend').hidden")
+    assert page.errors == []
+    page.context.close()

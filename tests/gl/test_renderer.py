@@ -12,6 +12,7 @@ from fogbank.scene import meshes as scenes
 from fogbank.kinds.reference import transmittance as reference
 from fogbank.model.params import StillParams
 from fogbank.model.fields import srgb_to_linear
+from hand import cast, hand_rays
 
 W, H = 320, 180
 
@@ -25,26 +26,6 @@ def srgb_to_linear_array(img):
     """8-bit sRGB pixels to linear light (IEC 61966-2-1), float64."""
     c = np.asarray(img, dtype=np.float64) / 255.0
     return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
-
-
-def hand_rotation(camera):
-    """The camera's orientation from its documented convention, written with scipy's
-    rotations and not with scene/camera.py: yaw 0 looks along -z and a positive yaw
-    turns right (toward +x), a rotation of -yaw about +y; then a positive pitch looks up,
-    +pitch about the camera's own x."""
-    from scipy.spatial.transform import Rotation
-    return Rotation.from_euler("YX", [-camera.yaw, camera.pitch], degrees=True)
-
-
-def hand_rays(camera, px, py, width, height):
-    """Unit world rays through pixel centres (py from the bottom): camera space x right,
-    y up, -z forward, the vertical field of view `fov`."""
-    tan = np.tan(np.radians(camera.fov) / 2)
-    nx = (np.asarray(px) + 0.5) / width * 2 - 1
-    ny = (np.asarray(py) + 0.5) / height * 2 - 1
-    v = np.stack([nx * tan * width / height, ny * tan, -np.ones_like(nx, dtype=float)], axis=-1)
-    w = hand_rotation(camera).apply(v.reshape(-1, 3))
-    return w / np.linalg.norm(w, axis=1, keepdims=True)
 
 
 def test_the_projection_matches_a_hand_written_camera():
@@ -65,29 +46,6 @@ def test_the_projection_matches_a_hand_written_camera():
         ndc = clip[:, :2] / clip[:, 3:4]
         got = np.c_[(ndc[:, 0] + 1) / 2 * w_ - 0.5, (ndc[:, 1] + 1) / 2 * h_ - 0.5]
         assert np.abs(got - np.c_[px, py]).max() < 1e-6 * max(w_, h_)
-
-
-def _cast(eye, w):
-    """Nearest hit of rays w from eye with the calibration scene: (distance, object index);
-    index -1 is the sky, 0 the ground, 1.. the boxes."""
-    n = len(w)
-    best = np.full(n, np.inf)
-    obj = np.full(n, -1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = -eye[1] / w[:, 1]
-    hit = (t > 0) & (np.abs(eye[0] + t * w[:, 0]) < 2000) & (np.abs(eye[2] + t * w[:, 2]) < 2000)
-    best = np.where(hit, t, best)
-    obj = np.where(hit, 0, obj)
-    for i, (lo, hi, _) in enumerate(scenes.CALIBRATION_BOXES, start=1):
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t0 = (np.array(lo) - eye) / w
-            t1 = (np.array(hi) - eye) / w
-        tmin = np.nanmax(np.minimum(t0, t1), axis=1)
-        tmax = np.nanmin(np.maximum(t0, t1), axis=1)
-        h = (tmax >= tmin) & (tmin > 0) & (tmin < best)
-        best = np.where(h, tmin, best)
-        obj = np.where(h, i, obj)
-    return best, obj
 
 
 def calibration_still(**fog):
@@ -131,7 +89,7 @@ def _check_pixels(renderer, still, min_share=0.8):
     py, px = np.mgrid[0:H, 0:W]
     gl_y = H - 1 - py                                  # image rows are top first
     w = hand_rays(still.camera, px.ravel(), gl_y.ravel(), W, H)   # not the renderer's camera
-    d, obj = _cast(view.eye, w)
+    d, obj = cast(view.eye, w)
     obj = np.where(d < cam.FAR, obj, -1).reshape(H, W)   # beyond the far plane: sky
     # interior pixels only: the 3x3 neighbourhood sees the same object (MSAA edges excluded)
     same = np.ones((H, W), bool)
@@ -394,7 +352,7 @@ def test_scatter_phase_color_and_start_distance(renderer, phase, start, g):
     py, px = np.mgrid[0:H, 0:W]
     w = hand_rays(still.camera, px.ravel(), (H - 1 - py).ravel(), W, H)
     eye = np.asarray(still.camera.position, dtype=np.float64)
-    d, obj = _cast(eye, w)
+    d, obj = cast(eye, w)
     obj = np.where(d < cam.FAR, obj, -1).reshape(H, W)
     same = np.ones((H, W), bool)
     for dy in (-1, 0, 1):
@@ -587,7 +545,7 @@ def test_single_pass_blur_has_no_ghosts(renderer):
     img = renderer.render(still).astype(np.float64)[..., 1]   # green: the red box is dark in it
     py, px = np.mgrid[0:360, 0:640]
     w = hand_rays(still.camera, px.ravel(), (359 - py).ravel(), 640, 360)
-    d, obj = _cast(np.asarray(still.camera.position, dtype=np.float64), w)
+    d, obj = cast(np.asarray(still.camera.position, dtype=np.float64), w)
     red = obj.reshape(360, 640) == 1
     cols = np.nonzero(red.sum(axis=0) > 10)[0]
     cols = cols[len(cols) // 2 - 6:len(cols) // 2 + 6]
@@ -620,7 +578,7 @@ def supersampled_ground(still):
         for sx in range(4):
             w = hand_rays(still.camera, px.ravel() + (sx + 0.5) / 4 - 0.5, py.ravel() + (sy + 0.5) / 4 - 0.5,
                           w_, h)
-            d, obj = _cast(eye, w)
+            d, obj = cast(eye, w)
             ground &= obj == 0
             d = np.where(obj == 0, d, 1.0)
             acc += reference(still.fog(), np.broadcast_to(eye, w.shape), w, d, still.time)
@@ -685,7 +643,7 @@ def test_silhouettes_match_the_per_sample_fog_of_a_hand_raster(renderer, density
     objs = []
     for sx, sy in MSAA_POSITIONS:
         w = hand_rays(still.camera, px.ravel() + sx / 8 - 0.5, gl_y + sy / 8 - 0.5, W, H)
-        d, obj = _cast(view.eye, w)
+        d, obj = cast(view.eye, w)
         obj = np.where(d < cam.FAR, obj, -1)
         d = np.where(obj == -1, still.effects.sky_distance, d)
         T = reference(still.fog(), np.broadcast_to(view.eye, w.shape), w, d, still.time)[:, None]

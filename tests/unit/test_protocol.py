@@ -15,6 +15,8 @@ def test_valid_messages_parse():
     assert parse('{"type": "ack", "frame": 3}').frame == 3
     assert parse(b'{"type": "play", "playing": false}').playing is False
     assert parse('{"type": "view", "width": 320, "height": 200}').fps == 30
+    v = parse('{"type": "view", "show": "optical_depth", "layer": 2}')
+    assert (v.show, v.layer) == ("optical_depth", 2)
 
 
 @pytest.mark.parametrize("text,loc,word", [
@@ -25,6 +27,8 @@ def test_valid_messages_parse():
     ('{"type": "view", "width": 99999}', ["message", "width"], "less than or equal"),
     ('{"type": "speed", "speed": NaN}', ["message", "speed"], "finite"),
     ('{"type": "ack", "frame": 1, "extra": 2}', ["message", "extra"], "not permitted"),
+    ('{"type": "view", "show": "normals"}', ["message", "show"], "'transmittance'"),
+    ('{"type": "view", "show": "optical_depth", "layer": 16}', ["message", "layer"], "less than 16"),
     (b"\xff\xfe", ["message"], "UTF-8"),
 ])
 def test_bad_messages_name_the_problem(text, loc, word):

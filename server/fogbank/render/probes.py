@@ -19,17 +19,17 @@ def fog_only(r, still, raymarch_steps: int | None = None, read: bool = True, fil
     work of the fog and particle passes (uploads included), not the fog plan's CPU work
     (packing, particle simulation), which runs on the preparation thread before it. With
     `filtered`, the jittered fog's filter pass runs between them, as in a frame."""
-    ms, f = _fog_frame(r, still, raymarch_steps, filtered)
+    ms, f = fog_frame(r, still, raymarch_steps, filtered)
     if not read:
         return ms
     a = fog_texels(f)
     return ms, a[..., 0].copy(), a[..., 1].copy(), f.view
 
 
-def _fog_frame(r, still, raymarch_steps: int | None = None, filtered: bool = False):
-    """(milliseconds of the fog and particle passes, the frame) after the cached scene
-    passes, slot "bench"."""
-    f = r.begin(still, slot="bench", msaa=True)
+def fog_frame(r, still, raymarch_steps: int | None = None, filtered: bool = False, slot: str = "bench"):
+    """(milliseconds of the fog and particle passes, the frame) after the scene passes,
+    cached in `slot`."""
+    f = r.begin(still, slot=slot, msaa=True)
     f.raymarch_steps = raymarch_steps
     for p in (ShadowPass(), SkyPass(), ScenePass(), ResolvePass()):
         p.run(r, f)
@@ -51,4 +51,4 @@ def fog_texels(f) -> np.ndarray:
 
 def fog_target(r, still, filtered: bool = False) -> np.ndarray:
     """fog_only's passes, then the whole fog target (fog_texels)."""
-    return fog_texels(_fog_frame(r, still, filtered=filtered)[1])
+    return fog_texels(fog_frame(r, still, filtered=filtered)[1])

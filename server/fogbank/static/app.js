@@ -373,7 +373,55 @@ function viewSize() {
 }
 function sendView() {
   const [width, height] = viewSize();
-  stream.setView({ width, height, fps: 60, quality: 80 });
+  const { show, showLayer } = store.get();
+  stream.setView({ width, height, fps: 60, quality: 80, show, layer: showLayer });
+}
+
+// ------------------------------------------------------------------ views that teach
+// The frames show the look, its transmittance, one layer's optical depth, or where the
+// closed forms and a raymarch differ; the server sends each view's numbers and legend.
+$("show").addEventListener("change", () => {
+  store.set({ show: $("show").value, viewStats: null });
+  sendView();
+});
+$("show-layer").addEventListener("change", () => {
+  store.set({ showLayer: Number($("show-layer").value), viewStats: null });
+  sendView();
+});
+stream.addEventListener("view_stats", (e) => store.set({ viewStats: e.detail }));
+store.subscribe((s, prev) => {
+  if (s.params && (s.params.layers !== prev.params?.layers || s.show !== prev.show)) showLayers(s);
+  if (s.viewStats !== prev.viewStats || s.show !== prev.show) showLegend(s);
+});
+function showLayers(s) {
+  const sel = $("show-layer");
+  const layers = s.params.layers;
+  sel.hidden = s.show !== "optical_depth";
+  const names = layers.map((l, i) => `${i + 1}. ${l.kind}`);
+  if ([...sel.options].map((o) => o.text).join() !== names.join()) {
+    sel.replaceChildren(...names.map((n, i) => new Option(n, String(i))));
+  }
+  // the layer shown must exist: the last one when the list got shorter
+  const layer = Math.min(s.showLayer, Math.max(0, layers.length - 1));
+  sel.value = String(layer);
+  if (layer !== s.showLayer) { store.set({ showLayer: layer }); sendView(); }
+}
+const fmt = (v) => (v === 0 ? "0" : Math.abs(v) >= 0.01 && Math.abs(v) < 1000 ? v.toPrecision(3) : v.toExponential(2));
+function showLegend(s) {
+  const st = s.viewStats;
+  $("legend").hidden = s.show === "shaded" || !st;
+  if (!st || s.show === "shaded") return;
+  $("legend-label").textContent = st.legend.label;
+  $("legend-lo").textContent = fmt(st.legend.lo);
+  $("legend-hi").textContent = (st.show === "transmittance" ? "" : "≥ ") + fmt(st.legend.hi);
+  $("legend-bar").style.background = `linear-gradient(to right, ${st.legend.colors.join(", ")})`;
+  const lines = {
+    transmittance: () => `min T ${fmt(st.min)} · mean T ${fmt(st.mean)}`,
+    optical_depth: () => `layer ${st.layer + 1} (${st.kind}) · max τ ${fmt(st.max)} · mean τ ${fmt(st.mean)}`,
+    difference: () => `max |ΔT| ${fmt(st.max_abs_dT)} · 99% of pixels under ${fmt(st.p99_abs_dT)} · ` +
+      "where they differ, the raymarch errs",
+  };
+  $("legend-stats").textContent = lines[st.show]?.() || "";
 }
 
 // ------------------------------------------------------------------ overlay

@@ -40,6 +40,9 @@ export const store = createStore({
   flushQueued: false,   // an animation frame will send the pending patches
   unsent: null,         // params patch made while disconnected, sent on reconnect
   base: null,           // the preset the look started from (Reset to preset, Reset camera)
+  show: "shaded",       // what the frames show: the look, or a view that teaches
+  showLayer: 0,         // the layer whose optical depth is shown
+  viewStats: null,      // the numbers and legend of the last view that teaches
 });
 
 // Values derived from the state (no second copy is kept).

@@ -8,11 +8,14 @@ Client -> server, one JSON object per text message, told apart by "type":
     {"type": "play", "playing": true}                      run or stop the clock
     {"type": "speed", "speed": 2.0}                        time speed (sim s per wall s)
     {"type": "seek", "time": 12.5}                         set the sim time
-    {"type": "view", "width": 640, "height": 360, "fps": 30, "quality": 80}
+    {"type": "view", "width": 640, "height": 360, "fps": 30, "quality": 80,
+     "show": "shaded", "layer": 0}                        size, rate, and what the frames show
     {"type": "interact", "active": true}                   a drag started/ended
     {"type": "ack", "frame": 17}                           frames up to 17 arrived
 
-Server -> client: text {"type": "hello" | "state" | "error", ...} and binary frames:
+Server -> client: text {"type": "hello" | "state" | "error" | "view_stats", ...} and
+binary frames (a view that teaches, render/teach.py, sends its numbers and legend as
+"view_stats" just before its frame):
 HEADER (little-endian, 36 bytes) followed by the JPEG.
 """
 
@@ -25,6 +28,7 @@ from typing import Annotated, Any, Literal, Union
 from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError
 
 from fogbank.model.errors import clean, error, from_validation
+from fogbank.model.fields import MAX_LAYERS
 
 PROTOCOL = 1
 MAX_MESSAGE = 64 * 1024
@@ -77,6 +81,9 @@ class ViewMsg(_Msg):
     height: int = Field(360, ge=16, le=1080)
     fps: int = Field(30, ge=1, le=120)
     quality: int = Field(80, ge=10, le=95)
+    # what the frames show: the shaded look, or a view that teaches (render/teach.py)
+    show: Literal["shaded", "transmittance", "optical_depth", "difference"] = "shaded"
+    layer: int = Field(0, ge=0, lt=MAX_LAYERS, description="the layer whose optical depth is shown")
 
 
 class InteractMsg(_Msg):

@@ -37,6 +37,8 @@ class FrameJob:
     quality: int
     full: bool
     playing: bool
+    show: str = "shaded"   # or a view that teaches (render/teach.py), with its layer
+    layer: int = 0
 
 
 class Session:
@@ -203,7 +205,7 @@ class Session:
         self.last_full = not preview
         return FrameJob(self.frame, self.version, still, msaa=not preview,
                         quality=min(v.quality, PREVIEW_QUALITY) if preview else v.quality,
-                        full=not preview, playing=self.playing)
+                        full=not preview, playing=self.playing, show=v.show, layer=v.layer)
 
     def pause(self, now: float) -> None:
         """Stop the clock and make no frame until the look changes (its frame was too

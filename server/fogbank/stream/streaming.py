@@ -160,7 +160,7 @@ class Streamer:
         try:
             try:
                 out = await self.workers.call(slot, worker.frame, job.still, s.id, job.msaa, job.quality,
-                                              deadline=self.settings.frame_deadline_s)
+                                              job.show, job.layer, deadline=self.settings.frame_deadline_s)
                 slot.drew(cost.program_key(job.still))
             finally:
                 self.frames[slot.index] -= 1
@@ -176,6 +176,8 @@ class Streamer:
             # encodes differ): this one is stale, drop it rather than show the past
             if not client.closed and job.frame > s.sent:
                 s.sent = job.frame
+                if out.get("stats"):   # a view that teaches: its numbers and legend first
+                    await client.send_json({"type": "view_stats", "frame": job.frame, **out["stats"]})
                 await client.send_bytes(header + out["data"])
                 if client.unacked_since is None:
                     client.unacked_since = self.clock()

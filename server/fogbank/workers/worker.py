@@ -159,16 +159,23 @@ def probe() -> dict[str, Any]:
     return _run(fn)
 
 
-def frame(still, slot: str, msaa: bool, quality: int) -> dict[str, Any]:
-    """One stream frame as JPEG; `slot` names the session whose scene pass is cached."""
+def frame(still, slot: str, msaa: bool, quality: int, show: str = "shaded", layer: int = 0) -> dict[str, Any]:
+    """One stream frame as JPEG; `slot` names the session whose scene pass is cached.
+    `show` other than "shaded" draws a view that teaches instead (render/teach.py), and
+    its numbers and legend come back as "stats"."""
+    from fogbank.render import teach
     from fogbank.render.encode import encode
 
     def fn(r):
         t0 = time.perf_counter()
-        img = r.render(still, slot=slot, msaa=msaa)
+        stats = None
+        if show == "shaded":
+            img = r.render(still, slot=slot, msaa=msaa)
+        else:
+            img, stats = teach.render(r, still, show, layer, slot=slot)
         t1 = time.perf_counter()
         data = encode(img, "jpg", quality)
-        return {"data": data, "render_ms": (t1 - t0) * 1000.0,
+        return {"data": data, "render_ms": (t1 - t0) * 1000.0, "stats": stats,
                 "encode_ms": (time.perf_counter() - t1) * 1000.0}
     return _run(fn)
 
