@@ -154,3 +154,47 @@ def test_an_unknown_preset_or_version_keeps_the_rest_of_the_link():
 def test_an_unreadable_link_is_refused_whole(q):
     with pytest.raises(URLError):
         decode_lenient(q)
+
+
+def longest_look(monkeypatch, seed: int = 0) -> StillParams:
+    """The look with the longest readable query the schema allows, near enough: every list
+    at its longest, every number drawn over its whole range and then given a 17-digit text
+    (the same magnitude, so the model's validators hold as often as for any draw), and 16
+    layers of the kind whose layer reads longest."""
+    import domain
+    from fogbank.model.params import LAYER_CLASSES
+    from fogbank.model.urlstate import _format
+    draw_number, lengths = domain.draw_number, domain._lengths
+
+    def long_number(rng, lo, hi, open_lo, integer):
+        v = draw_number(rng, lo, hi, open_lo, integer)
+        if integer or not v:
+            return v
+        for w in (v * (1 + 2 ** -40), v * (1 - 2 ** -40)):
+            if (lo is None or w > lo or (w == lo and not open_lo)) and (hi is None or w <= hi):
+                return w
+        return v
+    monkeypatch.setattr(domain, "draw_number", long_number)
+    monkeypatch.setattr(domain, "_lengths", lambda metadata: (lengths(metadata)[1],) * 2)
+    rng = np.random.default_rng(seed)
+
+    def layer(kind):
+        return domain.draw_model(LAYER_CLASSES[kind], rng, as_dict=True, fixed={"kind": kind})
+
+    def text(layers):
+        return len(encode(StillParams.model_validate({"layers": layers})))
+    kind = max(LAYER_CLASSES, key=lambda k: max(text([layer(k)]) for _ in range(8)))
+    layers = [max((layer(kind) for _ in range(8)), key=lambda l: text([l])) for _ in range(16)]
+    return domain.draw_model(StillParams, rng, fixed={"layers": layers})
+
+
+def test_every_look_has_a_link(monkeypatch):
+    """The longest look's readable query is within MAX_QUERY (a 16-layer look of 8-term
+    cosines was over the old 16384 and could not be linked at all)."""
+    from fogbank.model.urlstate import MAX_QUERY
+    for seed in range(3):
+        look = longest_look(monkeypatch, seed)
+        q = encode(look)
+        assert len(q) <= MAX_QUERY
+        assert len(q) > 20000   # it is the long case: 16 layers with every list full
+        assert StillParams.model_validate(decode(q, StillParams)[0]) == look

@@ -35,7 +35,9 @@ VIEW_KEYS = ("play", "speed")
 _SAFE = ",.-_~"
 _HEX = re.compile(r"^#[0-9a-f]{6}$")
 _NUMBER = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?|[+-]?(inf|nan|infinity)", re.I | re.A)
-MAX_QUERY = 16384
+# The longest query decoded. Every valid look has a link: the longest (16 cosine layers of
+# 8 terms, numbers at their longest text) is 25-28k characters (test_urlstate).
+MAX_QUERY = 32768
 MAX_LIST = 64
 
 

@@ -25,6 +25,7 @@ from typing import Annotated, Any, Literal, Union
 from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError
 
 from fogbank.model.errors import clean, error, from_validation
+from fogbank.model.urlstate import MAX_QUERY
 
 PROTOCOL = 1
 MAX_MESSAGE = 64 * 1024
@@ -42,7 +43,7 @@ class _Msg(BaseModel):
 
 class QueryMsg(_Msg):
     type: Literal["query"]
-    query: str = Field(max_length=16384)
+    query: str = Field(max_length=MAX_QUERY)
 
 
 class ParamsMsg(_Msg):
