@@ -159,44 +159,17 @@ def test_an_unreadable_link_is_refused_whole(q):
         decode_lenient(q)
 
 
-def longest_look(monkeypatch, seed: int = 0) -> StillParams:
-    """The look with the longest readable query the schema allows, near enough: every list
-    at its longest, every number drawn over its whole range and then given a 17-digit text
-    (the same magnitude, so the model's validators hold as often as for any draw), and 16
-    layers of the kind whose layer reads longest."""
-    import domain
-    from fogbank.model.params import LAYER_CLASSES
-    from fogbank.model.urlstate import _format
-    draw_number, lengths = domain.draw_number, domain._lengths
-
-    def long_number(rng, lo, hi, open_lo, integer):
-        v = draw_number(rng, lo, hi, open_lo, integer)
-        if integer or not v:
-            return v
-        for w in (v * (1 + 2 ** -40), v * (1 - 2 ** -40)):
-            if (lo is None or w > lo or (w == lo and not open_lo)) and (hi is None or w <= hi):
-                return w
-        return v
-    monkeypatch.setattr(domain, "draw_number", long_number)
-    monkeypatch.setattr(domain, "_lengths", lambda metadata: (lengths(metadata)[1],) * 2)
-    rng = np.random.default_rng(seed)
-
-    def layer(kind):
-        return domain.draw_model(LAYER_CLASSES[kind], rng, as_dict=True, fixed={"kind": kind})
-
-    def text(layers):
-        return len(encode(StillParams.model_validate({"layers": layers})))
-    kind = max(LAYER_CLASSES, key=lambda k: max(text([layer(k)]) for _ in range(8)))
-    layers = [max((layer(kind) for _ in range(8)), key=lambda l: text([l])) for _ in range(16)]
-    return domain.draw_model(StillParams, rng, fixed={"layers": layers})
+def longest_look(seed: int = 0) -> StillParams:
+    from domain import long_look
+    return long_look(np.random.default_rng(seed), None, StillParams, "domain")
 
 
-def test_every_look_has_a_link(monkeypatch):
+def test_every_look_has_a_link():
     """The longest look's readable query is within MAX_QUERY (a 16-layer look of 8-term
     cosines was over the old 16384 and could not be linked at all)."""
     from fogbank.model.urlstate import MAX_QUERY
     for seed in range(3):
-        look = longest_look(monkeypatch, seed)
+        look = longest_look(seed)
         q = encode(look)
         assert len(q) <= MAX_QUERY
         assert len(q) > 20000   # it is the long case: 16 layers with every list full
@@ -240,9 +213,9 @@ def test_a_compact_link_reads_as_its_readable_query(q):
     assert canonical(z, StillParams) == canonical(q, StillParams)
 
 
-def test_the_longest_look_has_a_compact_link(monkeypatch):
+def test_the_longest_look_has_a_compact_link():
     from fogbank.model.urlstate import MAX_COMPACT, compact
-    look = longest_look(monkeypatch)
+    look = longest_look()
     z = compact(encode(look))
     assert len(z) - len("z=") <= MAX_COMPACT
     assert StillParams.model_validate(decode(z, StillParams)[0]) == look
