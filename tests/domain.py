@@ -232,12 +232,14 @@ def _long_text():
         draw_number, _lengths = number, lengths
 
 
-def long_look(rng, min_chars: int | None = None, cls: type[FogParams] = FogParams, scale: str = "scene"):
+def long_look(rng, min_chars: int | None = None, cls: type[FogParams] = FogParams, scale: str = "scene",
+              enabled: int | None = None):
     """A look with a long readable query: layers of the kind whose layer reads longest,
-    with long text (see _long_text), added until the query is `min_chars` long; the rest
-    is the default preset. With `min_chars` None: MAX_LAYERS such layers and every other
-    field drawn too, which is the longest look the schema allows, near enough."""
-    from fogbank.model import presets
+    with long text (see _long_text), added until the query is `min_chars` long, the rest
+    the model's defaults; only the first `enabled` layers on (None: all; a test of links
+    need not pay the seconds a fog program of many layers takes to compile). With
+    `min_chars` None: MAX_LAYERS such layers and every other field drawn too, which is the
+    longest look the schema allows, near enough."""
     from fogbank.model.urlstate import encode
 
     def text(fog) -> int:
@@ -247,13 +249,17 @@ def long_look(rng, min_chars: int | None = None, cls: type[FogParams] = FogParam
             return draw_model(LAYER_CLASSES[kind], rng, scale, as_dict=True, fixed={"kind": kind, "enabled": True})
         kind = max(LAYER_CLASSES, key=lambda k: max(text(cls.model_validate({"layers": [layer(k)]}))
                                                      for _ in range(8)))
-        best = lambda: max((layer(kind) for _ in range(8)), key=lambda l: text(cls.model_validate({"layers": [l]})))
+
+        def best():
+            return max((layer(kind) for _ in range(8)), key=lambda l: text(cls.model_validate({"layers": [l]})))
         if min_chars is None:
             return draw_model(cls, rng, scale, fixed={"layers": [best() for _ in range(MAX_LAYERS)]})
         layers: list[dict] = []
         while len(layers) < MAX_LAYERS:
             layers.append(best())
-            fog = cls.model_validate({**presets.preset_dict("default"), "layers": layers})
+            if enabled is not None:
+                layers[-1]["enabled"] = len(layers) <= enabled
+            fog = cls.model_validate({"layers": layers})
             if text(fog) >= min_chars:
                 return fog
     raise AssertionError(f"no look of {min_chars} characters with {MAX_LAYERS} layers")
