@@ -140,6 +140,28 @@ def test_a_long_look_opens_from_both_its_links_direct_and_through_nginx(topology
             assert (state["type"], state["params"]) == ("state", opened)
 
 
+def test_an_over_long_link_gets_the_page_that_explains_through_nginx(topology):
+    """nginx passes request lines up to 1 MiB to the app, which says how long the link is;
+    past that nginx answers itself with the app's own page (nginx's bare 414 before)."""
+    from fogbank.service.limits import PAGE_HEADERS, too_long_page
+    from fogbank.settings import Settings
+    lb, _ = topology
+    limit = Settings().max_url_bytes
+    for n in (100_000, 1_000_000, 2_000_000):
+        q = "v=1&pad=" + "a" * n
+        status, headers, body = http_get(lb.url + "/?" + q)
+        assert (status, headers["Content-Type"]) == (414, "text/html; charset=utf-8")
+        if n < 1 << 20:
+            assert body == too_long_page(len("/?" + q), limit)
+        else:
+            assert body == too_long_page(None, limit)
+            assert headers["Content-Security-Policy"] == dict(PAGE_HEADERS)[b"content-security-policy"].decode()
+        status, headers, body = http_get(lb.url + "/api/still.png?" + q)
+        assert status == 414
+        if n < 1 << 20:   # the API's routes answer in JSON, as all their errors
+            assert json.loads(body)["detail"][0]["loc"] == ["url"]
+
+
 def test_browser_fails_over_when_its_replica_is_killed(browser):
     replicas = [Server().start(), Server().start()]
     lb = Nginx([r.port for r in replicas]).start()
