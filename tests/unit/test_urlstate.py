@@ -326,3 +326,11 @@ def test_long_queries_are_shared_compact():
                                                        for i in range(4)]}))
     assert len(long) > LONG_QUERY
     assert shareable(long).startswith("z=") and decode(shareable(long)) == decode(long)
+
+
+def test_the_page_compacts_past_the_same_length():
+    from fogbank import STATIC_DIR
+    from fogbank.model.urlstate import BESIDE_Z, LONG_QUERY
+    js = (STATIC_DIR / "links.js").read_text()
+    assert re.search(r"export const LONG_QUERY = (\d+);", js)[1] == str(LONG_QUERY)
+    assert re.search(r"const BESIDE_Z = new Set\(\[([^\]]*)\]\)", js)[1] == ", ".join(f'"{k}"' for k in BESIDE_Z)
