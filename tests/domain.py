@@ -11,6 +11,7 @@ honoured by rejection: a draw they refuse is drawn again.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import types
 import typing
@@ -22,7 +23,7 @@ from pydantic import BaseModel, ValidationError
 
 from fogbank.model.params import LAYER_CLASSES, FogParams
 
-from fogbank.model.fields import POSITION_LIMIT, RAY_LIMIT, Position
+from fogbank.model.fields import MAX_LAYERS, POSITION_LIMIT, RAY_LIMIT, Position
 
 SCENE_POSITION = 500.0      # scene scale: every position within +-500 m ...
 SCENE_LENGTH = 2000.0       # ... rays up to 2 km ...
@@ -206,3 +207,59 @@ def draw_rays(fog: FogParams, rng, n: int, scale: str = "domain", extra=()):
                 reach = np.linalg.norm(aim)
                 D[i] = min(longest, reach * float(rng.choice([0.5, 1.0, 2.0, 10.0])))
     return O, W, D
+
+
+@contextlib.contextmanager
+def _long_text():
+    """Draws whose readable query is as long as the model allows: every list at its
+    longest, every number given a 17-digit text (its magnitude kept, so the model's
+    validators refuse a draw no more often than any other)."""
+    global draw_number, _lengths
+    number, lengths = draw_number, _lengths
+
+    def long_number(rng, lo, hi, open_lo, integer):
+        v = number(rng, lo, hi, open_lo, integer)
+        if integer or not v:
+            return v
+        for w in (v * (1 + 2 ** -40), v * (1 - 2 ** -40)):
+            if (lo is None or w > lo or (w == lo and not open_lo)) and (hi is None or w <= hi):
+                return w
+        return v
+    draw_number, _lengths = long_number, (lambda metadata: (lengths(metadata)[1],) * 2)
+    try:
+        yield
+    finally:
+        draw_number, _lengths = number, lengths
+
+
+def long_look(rng, min_chars: int | None = None, cls: type[FogParams] = FogParams, scale: str = "scene",
+              enabled: int | None = None):
+    """A look with a long readable query: layers of the kind whose layer reads longest,
+    with long text (see _long_text), added until the query is `min_chars` long, the rest
+    the model's defaults; only the first `enabled` layers on (None: all; a test of links
+    need not pay the seconds a fog program of many layers takes to compile). With
+    `min_chars` None: MAX_LAYERS such layers and every other field drawn too, which is the
+    longest look the schema allows, near enough."""
+    from fogbank.model.urlstate import encode
+
+    def text(fog) -> int:
+        return len(encode(fog))
+    with _long_text():
+        def layer(kind):
+            return draw_model(LAYER_CLASSES[kind], rng, scale, as_dict=True, fixed={"kind": kind, "enabled": True})
+        kind = max(LAYER_CLASSES, key=lambda k: max(text(cls.model_validate({"layers": [layer(k)]}))
+                                                     for _ in range(8)))
+
+        def best():
+            return max((layer(kind) for _ in range(8)), key=lambda l: text(cls.model_validate({"layers": [l]})))
+        if min_chars is None:
+            return draw_model(cls, rng, scale, fixed={"layers": [best() for _ in range(MAX_LAYERS)]})
+        layers: list[dict] = []
+        while len(layers) < MAX_LAYERS:
+            layers.append(best())
+            if enabled is not None:
+                layers[-1]["enabled"] = len(layers) <= enabled
+            fog = cls.model_validate({"layers": layers})
+            if text(fog) >= min_chars:
+                return fog
+    raise AssertionError(f"no look of {min_chars} characters with {MAX_LAYERS} layers")

@@ -28,6 +28,8 @@ def _still_params(args):
 
 
 def cmd_serve(args) -> None:
+    import os
+
     import uvicorn
 
     from fogbank.service import logs
@@ -40,9 +42,16 @@ def cmd_serve(args) -> None:
     settings = base.model_copy(update={"host": args.host or base.host, "port": args.port or base.port})
     app = create_app(settings)
     # h11 bounds the bytes it buffers for a request head (httptools does not); the app's
-    # RequestLimits answers in JSON below that bound. A WebSocket message is refused by
-    # the protocol past twice MAX_MESSAGE, by the app (1009, with a reason) past MAX_MESSAGE.
-    config = uvicorn.Config(app, host=settings.host, port=settings.port, log_config=None, http=json_h11_protocol(),
+    # RequestLimits answers below that bound (JSON; a page for a link opened in a browser).
+    # A WebSocket message is refused by the protocol past twice MAX_MESSAGE, by the app
+    # (1009, with a reason) past MAX_MESSAGE.
+    # websockets reads a WebSocket request line of at most 8192 bytes (a /ws link of a
+    # long look got a plain-text 400, and the page a black view); let the app's own limit
+    # answer instead. websockets' reader still ends a line at 32 KiB. Read on import,
+    # which uvicorn does when it starts.
+    os.environ.setdefault("WEBSOCKETS_MAX_LINE_LENGTH", str(MAX_HEAD_BYTES))
+    config = uvicorn.Config(app, host=settings.host, port=settings.port, log_config=None,
+                            http=json_h11_protocol(settings.max_url_bytes),
                             h11_max_incomplete_event_size=MAX_HEAD_BYTES, ws="websockets",
                             ws_max_size=2 * MAX_MESSAGE, timeout_graceful_shutdown=20,
                             timeout_keep_alive=15, proxy_headers=True,

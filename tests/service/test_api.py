@@ -45,6 +45,20 @@ def test_post_still_matches_get(client):
     assert np.array_equal(img(get), img(post))
 
 
+def test_a_compact_query_gives_the_still_of_its_readable_query(client):
+    from fogbank.model.urlstate import compact, decode
+    q = "width=120&height=80&camera.yaw=20&density=1.5&layers=1&layers.0.kind=sphere&time=3"
+    readable, small = client.get("/api/still.png?" + q), client.get("/api/still.png?" + compact(q))
+    assert (readable.status_code, small.status_code) == (200, 200)
+    assert small.headers["etag"] == readable.headers["etag"]
+    assert small.content == readable.content
+    # the header names the look, readable while short
+    header = small.headers["x-fogbank-query"]
+    assert StillParams.model_validate(decode(header, StillParams)[0]) == \
+        StillParams.model_validate(decode(q, StillParams)[0])
+    assert not header.startswith("z=")
+
+
 def test_url_param_changes_the_picture(client):
     a = img(client.get("/api/still.png?width=160&height=90"))
     b = img(client.get("/api/still.png?width=160&height=90&density=3"))
@@ -69,6 +83,8 @@ BAD_QUERIES = [
     ("layers.9.density=1", ["query", "layers.9.density"]),
     ("layers.3.density=1", ["query", "layers", 3, "particles", "density"]),
     ("effects.fog_scale=3", ["query", "effects", "fog_scale"]),
+    ("z=not+base64", ["query", "z"]),
+    ("z=8wTA&density=2", ["query", "density"]),   # only play, speed and time stand beside z
 ]
 
 

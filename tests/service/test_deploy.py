@@ -21,6 +21,7 @@ import pytest
 import websockets
 import yaml
 
+from fogbank.model.params import FogParams
 from servers import DOCKER, HEAVY, Nginx, Server, post_still, run_async
 from test_page import canvas_pixels, new_page, wait_frames, wait_full_frame_of_current_version
 
@@ -88,6 +89,77 @@ def test_stills_and_streams_through_nginx(topology):
     with urllib.request.urlopen(lb.url + "/") as r:
         assert "script-src 'self'" in r.headers["Content-Security-Policy"]
     assert len(run_async(ws_frames(lb.url, 3))) == 3
+
+
+# ---------------------------------------------------------------- long links
+
+
+def http_get(url: str, timeout: float = 60):
+    """(status, headers (any case), body) whatever the status."""
+    try:
+        with urllib.request.urlopen(url, timeout=timeout) as r:
+            return r.status, r.headers, r.read()
+    except urllib.error.HTTPError as e:
+        return e.code, e.headers, e.read()
+
+
+async def first_state(url: str, query: str) -> dict:
+    """The look a new session opens with (/ws?query)."""
+    async with websockets.connect(url.replace("http", "ws", 1) + "/ws?" + query) as ws:
+        assert json.loads(await ws.recv())["type"] == "hello"
+        return json.loads(await ws.recv())
+
+
+def test_a_long_look_opens_from_both_its_links_direct_and_through_nginx(topology):
+    """A 12k-character look, from its readable link and its compact one, gives the same
+    still and the same session, from a replica and through nginx. Before: /ws refused a
+    request line over 8 KiB (a plain-text 400: the page's black view), and through nginx
+    every still of a look over ~4k was a 503 (its X-Fogbank-Query header outgrew nginx's
+    4k buffer for a response head)."""
+    from fogbank.model.params import StillParams
+    from fogbank.model.urlstate import compact, decode, encode
+    from domain import long_look
+    lb, replicas = topology
+    fog = long_look(np.random.default_rng(12), 12000, enabled=0)
+    look = StillParams.model_validate({**fog.model_dump(), "width": 64, "height": 48})
+    stills = {"readable": encode(look)}
+    stills["compact"] = compact(stills["readable"])
+    sessions = {"readable": encode(fog)}
+    sessions["compact"] = compact(sessions["readable"])
+    assert len(sessions["readable"]) >= 12000 and len(sessions["compact"]) < len(sessions["readable"])
+    ref = http_get(replicas[0].url + "/api/still.png?" + stills["readable"])
+    assert ref[0] == 200
+    opened = FogParams.model_validate(decode(sessions["readable"])[0]).model_dump(mode="json")
+    for base in (replicas[0].url, lb.url):
+        for form in ("readable", "compact"):
+            status, headers, png = http_get(base + "/api/still.png?" + stills[form])
+            assert (status, headers["ETag"], png) == (200, ref[1]["ETag"], ref[2])
+            assert headers["X-Fogbank-Query"].startswith("z=")   # compact: the header stays small
+            assert StillParams.model_validate(decode(headers["X-Fogbank-Query"], StillParams)[0]) == look
+            state = run_async(first_state(base, sessions[form]))
+            assert (state["type"], state["params"]) == ("state", opened)
+
+
+def test_an_over_long_link_gets_the_page_that_explains_through_nginx(topology):
+    """nginx passes request lines up to 1 MiB to the app, which says how long the link is;
+    past that nginx answers itself with the app's own page (nginx's bare 414 before)."""
+    from fogbank.service.limits import PAGE_HEADERS, too_long_page
+    from fogbank.settings import Settings
+    lb, _ = topology
+    limit = Settings().max_url_bytes
+    for n in (100_000, 1_000_000, 2_000_000):
+        q = "v=1&pad=" + "a" * n
+        status, headers, body = http_get(lb.url + "/?" + q)
+        assert (status, headers["Content-Type"]) == (414, "text/html; charset=utf-8")
+        if n < 1 << 20:
+            assert body == too_long_page(len("/?" + q), limit)
+        else:
+            assert body == too_long_page(None, limit)
+            assert headers["Content-Security-Policy"] == dict(PAGE_HEADERS)[b"content-security-policy"].decode()
+        status, headers, body = http_get(lb.url + "/api/still.png?" + q)
+        assert status == 414
+        if n < 1 << 20:   # the API's routes answer in JSON, as all their errors
+            assert json.loads(body)["detail"][0]["loc"] == ["url"]
 
 
 def test_browser_fails_over_when_its_replica_is_killed(browser):

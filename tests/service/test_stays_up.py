@@ -179,6 +179,35 @@ def test_over_long_urls_and_headers_get_json(server):
     assert get(server.url + "/healthz")[0] == 200
 
 
+def page_and_length(resp: bytes) -> tuple[int, str, str]:
+    """(status, content type, the sentence that says how long the link is) of a 414."""
+    head, _, body = resp.partition(b"\r\n\r\n")
+    ctype = next(line.split(b":", 1)[1].strip().decode() for line in head.split(b"\r\n")[1:]
+                 if line.lower().startswith(b"content-type:"))
+    sentence = body.decode().split('<p id="length">', 1)[1].split("</p>", 1)[0]
+    assert "Copy link" in body.decode() and "compact" in body.decode()
+    return int(head.split()[1]), ctype, sentence
+
+
+@pytest.mark.parametrize("n", [100_000, 1_000_000, 2_000_000])
+def test_an_over_long_link_gets_a_page_that_explains(server, n):
+    """A browser that opens an over-long link gets a page (issue 12: a bare "Invalid HTTP
+    request" at 100k characters) saying how long it is, the limit, and that "Copy link"
+    makes compact links; the API's routes answer the same 414 in JSON."""
+    from fogbank.service.limits import MAX_HEAD_BYTES
+    from fogbank.settings import Settings
+    target = b"/?v=1&density=2&pad=" + b"a" * (n - 20)
+    limit = Settings().max_url_bytes
+    length = f"{len(target):,} characters long" if len(target) < MAX_HEAD_BYTES else \
+        f"more than {MAX_HEAD_BYTES:,} characters long"
+    assert page_and_length(raw(server.port, b"GET " + target + b" HTTP/1.1\r\nHost: x\r\n\r\n")) == \
+        (414, "text/html; charset=utf-8", f"It is {length}; this server takes links of at most {limit:,} characters.")
+    status, body = status_and_json(raw(server.port, b"GET /api/still.png" + target[1:] + b" HTTP/1.1\r\n"
+                                                    b"Host: x\r\nAccept: text/html\r\n\r\n"))
+    assert status == 414 and body["detail"][0]["loc"] == ["url"] and f"at most {limit}" in body["detail"][0]["msg"]
+    assert get(server.url + "/healthz")[0] == 200
+
+
 def test_head_is_answered(server):
     for path in ("/", "/healthz", "/readyz"):
         c = http.client.HTTPConnection("127.0.0.1", server.port, timeout=10)

@@ -156,6 +156,21 @@ def test_errors_keep_the_session(client):
         assert frames[-1][0][2] == states[-1]["version"]
 
 
+def test_a_compact_link_opens_the_look_of_its_readable_query(client):
+    from fogbank.model.params import FogParams
+    from fogbank.model.urlstate import compact, decode
+    q = "camera.yaw=33&density=1.7&layers=1&layers.0.kind=sphere&layers.0.radius=9&time=4&play=0&speed=2"
+    with open_ws(client, compact(q)) as ws:
+        assert ws.receive_json()["type"] == "hello"
+        state = ws.receive_json()
+    assert state["params"] == FogParams.model_validate(decode(q)[0]).model_dump(mode="json")
+    assert (state["playing"], state["speed"]) == (False, 2.0)
+    with open_ws(client, "z=garbage!") as ws:   # nothing readable: the session keeps its look
+        ws.receive_json()
+        error = ws.receive_json()
+    assert error["type"] == "error" and error["detail"][0]["loc"] == ["query", "z"]
+
+
 def test_oversized_message_closes_with_1009(client):
     with open_ws(client) as ws:
         ws.receive_json(), ws.receive_json()

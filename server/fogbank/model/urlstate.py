@@ -15,13 +15,21 @@ A look is a readable query string of dotted field paths, defaults left out:
   codec version (1).
 
 encode(decode(q)) is the canonical form of q; decode(encode(p)) == p.
+
+A long look also has a compact form, `z=<base64url, no padding, of the raw deflate of
+the readable query>`, with only the page's keys (`play`, `speed`, `time`: how the
+animation plays and where it is) beside it. Every reader of a query (decode,
+decode_lenient, view_state) inflates `z` and reads the text exactly as a readable query:
+decode(compact(q)) == decode(q). The page makes it itself (static/links.js).
 """
 
 from __future__ import annotations
 
+import base64
 import re
+import zlib
 from typing import Annotated, Any, Literal, Union, get_args, get_origin
-from urllib.parse import parse_qsl, quote
+from urllib.parse import parse_qsl, quote, unquote_plus
 
 from pydantic import BaseModel, ValidationError
 
@@ -35,7 +43,23 @@ VIEW_KEYS = ("play", "speed")
 _SAFE = ",.-_~"
 _HEX = re.compile(r"^#[0-9a-f]{6}$")
 _NUMBER = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?|[+-]?(inf|nan|infinity)", re.I | re.A)
-MAX_QUERY = 16384
+# The longest query decoded, an inflated `z` included. Every valid look has a link: the
+# longest (16 cosine layers of 8 terms, numbers at their longest text) is 25-28k
+# characters (test_urlstate).
+MAX_QUERY = 32768
+# The longest `z` value: the longest look's compact form is 11-13k characters.
+MAX_COMPACT = 16384
+# A query longer than this is given in the compact form where a link is made (the page's
+# "Copy link" and its WebSocket URL, static/links.js; a still's X-Fogbank-Query header).
+# Short looks stay readable (people read them); past 2000 characters nobody reads a link,
+# and many tools that carry links (chat, mail, some proxies and old browsers: 2048-8192)
+# start to cut or refuse them. Compacting shrinks a look's text to 20-65% (the more
+# digits its numbers have, the less).
+LONG_QUERY = 2000
+# Keys that may stand beside `z`: the page-only keys, and `time` (part of the look, but it
+# says where the animation is: a link keeps it readable, and can change it uncompressed).
+BESIDE_Z = (*VIEW_KEYS, "time")
+_BASE64URL = re.compile(r"[A-Za-z0-9_-]*")
 MAX_LIST = 64
 
 
@@ -173,6 +197,97 @@ def encode(params: FogParams, base: str = "default") -> str:
     return "&".join(f"{k}={quote(v, safe=_SAFE)}" for k, v in pairs)
 
 
+# ---------------------------------------------------------------- compact form
+
+
+def _pairs(query: str) -> list[tuple[str, str]]:
+    if len(query) > MAX_QUERY:
+        raise URLError([error(["query"], f"query longer than {MAX_QUERY} characters", "url_too_long")])
+    try:
+        return parse_qsl(query, keep_blank_values=True, strict_parsing=bool(query), max_num_fields=1000)
+    except ValueError as exc:
+        raise URLError([error(["query"], f"malformed query string: {exc}", "url_malformed")]) from None
+
+
+def _bad_z(msg: str, kind: str = "url_compact") -> URLError:
+    return URLError([error(["query", "z"], f"{msg}; z is the base64url text (A-Z a-z 0-9 - _, no "
+                           f"padding, at most {MAX_COMPACT} characters) of the raw deflate of a "
+                           f"readable query of at most {MAX_QUERY} characters", kind)])
+
+
+def inflate(z: str) -> str:
+    """The readable query inside a `z` value; URLError naming `z` if there is none. The
+    inflated size is bounded as it is made: a small `z` that would inflate to gigabytes
+    costs no more than one that inflates to MAX_QUERY + 1 bytes."""
+    if len(z) > MAX_COMPACT:
+        raise _bad_z(f"z is {len(z)} characters long", "url_too_long")
+    if not _BASE64URL.fullmatch(z) or len(z) % 4 == 1:
+        raise _bad_z("z is not base64url")
+    try:
+        data = base64.b64decode(z + "=" * (-len(z) % 4), altchars=b"-_", validate=True)
+    except ValueError:
+        raise _bad_z("z is not base64url") from None
+    d = zlib.decompressobj(wbits=-15)
+    try:
+        raw = d.decompress(data, MAX_QUERY + 1)
+    except zlib.error as exc:
+        raise _bad_z(f"z does not inflate ({exc})") from None
+    if len(raw) > MAX_QUERY or d.unconsumed_tail:
+        raise _bad_z(f"z inflates to more than {MAX_QUERY} bytes", "url_too_long")
+    if not d.eof:
+        raise _bad_z("z is a truncated deflate stream")
+    if d.unused_data:
+        raise _bad_z("z has bytes after its deflate stream")
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError:
+        raise _bad_z("z inflates to bytes that are not UTF-8") from None
+
+
+def _key(part: str) -> str:
+    return unquote_plus(part.split("=", 1)[0])
+
+
+def _readable_pairs(query: str, lenient: list[dict[str, Any]] | None = None) -> list[tuple[str, str]]:
+    """The (key, value) pairs of a query, a compact one's `z` inflated and read as a
+    readable query, followed by the keys beside it. A key beside `z` that is not one of
+    BESIDE_Z is an error naming it; with `lenient` (a list) that key is left out and its
+    error appended there. Raises URLError for an over-long or malformed query or `z`."""
+    pairs = _pairs(query)
+    zs = [v for k, v in pairs if k == "z"]
+    if not zs:
+        return pairs
+    if len(zs) > 1:
+        raise URLError([error(["query", "z"], "given more than once", "url_duplicate")])
+    beside = [(k, v) for k, v in pairs if k in BESIDE_Z]
+    errors = [error(["query", k], f"may not stand beside z (only {', '.join(BESIDE_Z)} may: the "
+                    "rest of the look is inside z)", "url_compact")
+              for k, _ in pairs if k != "z" and k not in BESIDE_Z]
+    if errors and lenient is None:
+        raise URLError(errors)
+    inner = _pairs(inflate(zs[0]))
+    if any(k == "z" for k, _ in inner):
+        raise _bad_z("z inflates to a query that holds a z of its own")
+    if lenient is not None:
+        lenient += errors
+    return inner + beside
+
+
+def compact(query: str) -> str:
+    """The compact form of a readable query: `z=` and the rest of the look deflated, with
+    the keys of BESIDE_Z kept readable beside it (as the page's links.js makes it)."""
+    parts = [p for p in query.split("&") if p]
+    inside = "&".join(p for p in parts if _key(p) not in BESIDE_Z)
+    c = zlib.compressobj(9, zlib.DEFLATED, -15)
+    z = base64.urlsafe_b64encode(c.compress(inside.encode()) + c.flush()).rstrip(b"=").decode()
+    return "&".join([f"z={z}", *(p for p in parts if _key(p) in BESIDE_Z)])
+
+
+def shareable(query: str) -> str:
+    """A query as a link gives it: readable up to LONG_QUERY characters, else compact."""
+    return query if len(query) <= LONG_QUERY else compact(query)
+
+
 # ---------------------------------------------------------------- decode
 
 
@@ -183,17 +298,13 @@ def _field_ann(cls: type[BaseModel] | None, name: str) -> Any:
 
 
 def _fields(query: str, lenient: bool) -> tuple[dict[str, str], str, list[dict[str, Any]]]:
-    """(the look's fields, the base preset, errors) of a query: page-only keys removed,
-    `v` and `preset` read. Raises URLError for an over-long or malformed query. With
-    `lenient`, a bad version or preset is read as this version and "default"."""
-    if len(query) > MAX_QUERY:
-        raise URLError([error(["query"], f"query longer than {MAX_QUERY} characters", "url_too_long")])
-    try:
-        pairs = parse_qsl(query, keep_blank_values=True, strict_parsing=bool(query), max_num_fields=1000)
-    except ValueError as exc:
-        raise URLError([error(["query"], f"malformed query string: {exc}", "url_malformed")]) from None
-    fields: dict[str, str] = {}
+    """(the look's fields, the base preset, errors) of a query (a compact one inflated):
+    page-only keys removed, `v` and `preset` read. Raises URLError for an over-long or
+    malformed query or `z`. With `lenient`, a bad version or preset is read as this
+    version and "default", and a key that may not stand beside `z` is left out."""
     errors: list[dict[str, Any]] = []
+    pairs = _readable_pairs(query, errors if lenient else None)
+    fields: dict[str, str] = {}
     for k, v in pairs:
         if k in fields:
             _err(errors, k, "given more than once" + ("; the last is used" if lenient else ""), "url_duplicate")
@@ -352,10 +463,15 @@ def _set(cls, value, key, text, errors) -> None:
 
 
 def view_state(query: str) -> dict[str, Any]:
-    """The page-only keys of a query: {"playing": bool, "speed": float} where given.
-    Values that do not parse are ignored (they never change the look)."""
+    """The page-only keys of a query (a compact one inflated): {"playing": bool,
+    "speed": float} where given. Values that do not parse are ignored (they never change
+    the look)."""
     out: dict[str, Any] = {}
-    for k, v in parse_qsl(query, keep_blank_values=True):
+    try:
+        pairs = _readable_pairs(query, [])
+    except URLError:   # unreadable: the keys beside an unreadable z still say how to play
+        pairs = parse_qsl(query, keep_blank_values=True)
+    for k, v in pairs:
         if k == "play" and v in ("0", "1"):
             out["playing"] = v == "1"
         elif k == "speed":

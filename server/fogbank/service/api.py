@@ -40,7 +40,7 @@ from fogbank.service.security import SecurityHeaders, origin_allowed
 from fogbank.workers.supervisor import Supervisor, WorkerError
 from fogbank.settings import Settings, get_settings
 from fogbank.stream.streaming import Streamer, websocket_endpoint
-from fogbank.model.urlstate import URLError, decode
+from fogbank.model.urlstate import URLError, decode, shareable
 from fogbank.model.urlstate import encode as encode_url
 
 log = logging.getLogger("fogbank.service.api")
@@ -229,7 +229,10 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         query = encode_url(still)
         key = f"{__version__}|{info.get('renderer')}|{fmt}|{query}"
         etag = '"' + hashlib.sha256(key.encode()).hexdigest()[:32] + '"'
-        headers = {"ETag": etag, "Cache-Control": "public, max-age=3600", "X-Fogbank-Query": query}
+        # the look's link, compact when long: a readable one of a long look outgrew what a
+        # proxy buffers for a response head (nginx, 4k by default: every still of a look
+        # over ~4k characters was its 502, "no fogbank replica answered")
+        headers = {"ETag": etag, "Cache-Control": "public, max-age=3600", "X-Fogbank-Query": shareable(query)}
         if request.headers.get("if-none-match") == etag:
             return Response(status_code=304, headers=headers)
         cached = state["cache"].get(etag)

@@ -1,18 +1,81 @@
 """Request limits enforced before anything is parsed: body size (413), request-target
 length (414), header count and size (431). Pure ASGI, so the body is counted as it
-arrives and never buffered past the limit; every refusal is JSON naming the limit.
+arrives and never buffered past the limit; every refusal is JSON naming the limit, but
+for an over-long link opened in a browser: a page that says how long it is, the limit,
+and that the page's "Copy link" makes compact links that fit (414).
 
 The HTTP server (uvicorn on h11, see cli.py) bounds what it buffers for a request head
-to `MAX_HEAD_BYTES`; below that, these checks answer in JSON.
+to `MAX_HEAD_BYTES`; below that, these checks answer. Past it, a request line is answered
+with the same 414 (its length unknown: more than MAX_HEAD_BYTES), anything else in JSON.
 """
 
 from __future__ import annotations
 
+import base64
+import hashlib
+import re
+
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from fogbank.model import errors
+from fogbank.model.urlstate import MAX_COMPACT
 
 MAX_HEAD_BYTES = 1 << 20   # h11's buffer for a request line and headers
+# The service's machine routes: their errors are JSON, over-long URLs included. Every
+# other GET (the page, its docs, static files) is what a browser opens: an HTML page.
+MACHINE_ROUTES = ("/api/", "/healthz", "/readyz", "/metrics", "/openapi.json")
+
+_STYLE = ("body{font:16px/1.5 system-ui,sans-serif;max-width:40em;margin:4em auto;padding:0 1em;"
+          "color:#1d232b;background:#f4f6f8}h1{font-size:1.5em}code{font-size:.9em}")
+# no script, no images: the inline style alone, allowed by its hash
+PAGE_HEADERS = [
+    (b"content-type", b"text/html; charset=utf-8"),
+    (b"content-security-policy", (
+        "default-src 'none'; style-src 'sha256-"
+        + base64.b64encode(hashlib.sha256(_STYLE.encode()).digest()).decode()
+        + "'; base-uri 'none'; form-action 'none'; frame-ancestors 'none'").encode()),
+    (b"x-content-type-options", b"nosniff"), (b"referrer-policy", b"same-origin"),
+]
+
+
+def wants_page(method: str, path: str) -> bool:
+    """Whether a refusal of this request is a page (a browser opened a link) or JSON."""
+    return method in ("GET", "HEAD") and not path.startswith(MACHINE_ROUTES)
+
+
+def too_long_page(length: int | None, limit: int) -> bytes:
+    """The page for a link longer than `limit` characters (`length`; None: more than
+    MAX_HEAD_BYTES, the most the server reads of a request head)."""
+    size = f"{length:,} characters long" if length is not None else f"more than {MAX_HEAD_BYTES:,} characters long"
+    return f"""<!doctype html>
+<html lang="en">
+<head>
+<meta charset="utf-8">
+<meta name="viewport" content="width=device-width, initial-scale=1">
+<title>Link too long - fogbank</title>
+<style>{_STYLE}</style>
+</head>
+<body>
+<main>
+<h1>This link is too long</h1>
+<p id="length">It is {size}; this server takes links of at most {limit:,} characters.</p>
+<p>A look with many layers makes a long readable link. Every look also has a compact
+link, with the whole look compressed into it (<code>z=&hellip;</code>) in at most
+{MAX_COMPACT:,} characters: open the look on the page and press <strong>Copy link</strong>,
+which copies the compact link whenever the readable one is long.</p>
+<p>If this link was sent to you, ask for the link that <strong>Copy link</strong> gives.</p>
+<p><a href="/">Open fogbank</a></p>
+</main>
+</body>
+</html>
+""".encode()
+
+
+async def _refuse_page(send: Send, status: int, body: bytes) -> None:
+    await send({"type": "http.response.start", "status": status,
+                "headers": PAGE_HEADERS + [(b"content-length", str(len(body)).encode()),
+                                           (b"connection", b"close")]})
+    await send({"type": "http.response.body", "body": body})
 
 
 async def _refuse(send: Send, status: int, loc: str, msg: str) -> None:
@@ -34,11 +97,16 @@ class RequestLimits:
             await self.app(scope, receive, send)
             return
         headers = scope.get("headers", [])
-        target = len(scope.get("raw_path") or scope["path"].encode()) + len(scope.get("query_string", b""))
+        query = scope.get("query_string", b"")
+        target = len(scope.get("raw_path") or scope["path"].encode()) + (len(query) + 1 if query else 0)
         problem = None
+        if target > self.max_url and scope["type"] == "http" and wants_page(scope["method"], scope["path"]):
+            await _refuse_page(send, 414, too_long_page(target, self.max_url))
+            return
         if target > self.max_url:
             problem = (414, "url", f"the request target is {target} bytes; at most {self.max_url} are "
-                                   "allowed (for long looks, POST /api/still with a JSON body)")
+                                   "allowed (for long looks, the compact query z=... that the page's "
+                                   "Copy link makes, or POST /api/still with a JSON body)")
         elif len(headers) > self.max_headers:
             problem = (431, "headers", f"{len(headers)} headers; at most {self.max_headers} are allowed")
         elif sum(len(k) + len(v) + 4 for k, v in headers) > self.max_header_bytes:
@@ -89,19 +157,38 @@ class RequestLimits:
         await self.app(scope, replay, send)
 
 
-def json_h11_protocol():
+_REQUEST_LINE = re.compile(rb"([A-Z]{1,16}) (/[^?\s]*)")
+
+
+def json_h11_protocol(max_url: int):
     """uvicorn's h11 protocol, answering requests it cannot parse (a request head over
-    MAX_HEAD_BYTES, malformed HTTP) in JSON like every other error, not plain text."""
+    MAX_HEAD_BYTES, malformed HTTP) in JSON like every other error, not plain text; a
+    request line over MAX_HEAD_BYTES is a 414, a page where a browser opened it. `max_url`
+    is the app's own limit (RequestLimits), which the answer names."""
     import h11
     from uvicorn.protocols.http.h11_impl import H11Protocol
 
     class JSONErrorsH11(H11Protocol):
         def send_400_response(self, msg: str) -> None:
+            # what h11 could not make a request of: an over-long request line has no line
+            # end in it yet
+            buf = self.conn.trailing_data[0]
+            line = _REQUEST_LINE.match(buf[:4096])
+            status, reason = 400, b"Bad Request"
+            headers = [(b"content-type", b"application/json")]
             body = errors.body_bytes([errors.error(
                 ["request"], f"the request is malformed, or its line and headers exceed "
                 f"{MAX_HEAD_BYTES} bytes", "bad_request")])
-            event = h11.Response(status_code=400, reason=b"Bad Request",
-                                 headers=[(b"content-type", b"application/json"), (b"connection", b"close")])
+            if len(buf) > MAX_HEAD_BYTES and line is not None and b"\n" not in buf:
+                status, reason = 414, b"URI Too Long"
+                if wants_page(line[1].decode(), line[2].decode("latin-1")):
+                    headers, body = PAGE_HEADERS, too_long_page(None, max_url)
+                else:
+                    body = errors.body_bytes([errors.error(
+                        ["url"], f"the request target is more than {MAX_HEAD_BYTES} bytes; at most "
+                        f"{max_url} are allowed", "too_large")])
+            event = h11.Response(status_code=status, reason=reason, headers=[
+                *headers, (b"content-length", str(len(body)).encode()), (b"connection", b"close")])
             for ev in (event, h11.Data(data=body), h11.EndOfMessage()):
                 self.transport.write(self.conn.send(ev))
             self.transport.close()

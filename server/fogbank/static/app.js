@@ -299,15 +299,18 @@ $("time").addEventListener("input", () => {
 });
 $("time").addEventListener("change", () => { store.set({ scrubbing: false }); });
 // The link to share: the look, at the time on screen now (while playing, the address
-// bar's time is that of the last seek or pause).
-function shareLink() {
+// bar's time is that of the last seek or pause); compact (links.js) when the readable one
+// is long, readable otherwise (people read short ones).
+async function shareLink() {
   const q = new URLSearchParams(location.search);
   if (playing(store.get()) && store.get().lastFrame) q.set("time", String(Math.round(simTime(store.get()) * 1000) / 1000));
-  const text = q.toString().replace(/%2C/g, ",");
+  let text = q.toString().replace(/%2C/g, ",");
+  const links = await import("./links.js");   // loaded already: stream.js imports it
+  if (links.isLong(text)) text = await links.compactQuery(text);
   return `${location.origin}${location.pathname}${text ? `?${text}` : ""}`;
 }
 $("copy-link").addEventListener("click", async () => {
-  const link = shareLink();
+  const link = await shareLink();
   try {
     await navigator.clipboard.writeText(link);
     toast("Link copied");

@@ -4,6 +4,8 @@
 // sent them): decoding is async, and a frame whose decode ends after a newer frame was
 // drawn is dropped, never drawn over it.
 
+import { compactQuery, isLong } from "./links.js";
+
 const HEADER_BYTES = 36;
 const RETRY_CODES = new Set([1006, 1011, 1012, 1013]);
 
@@ -39,9 +41,16 @@ export class Stream extends EventTarget {
     this.decode = (blob) => createImageBitmap(blob);   // blob -> ImageBitmap (tests may swap it)
   }
 
+  // A long look connects with its compact link (links.js): a 12k-character /ws request
+  // line was refused (a black view), and proxies cap request lines too.
   connect() {
-    const proto = location.protocol === "https:" ? "wss:" : "ws:";
     const q = this.queryFn();
+    if (!isLong(q)) return this.open(q);
+    return compactQuery(q).then((z) => this.open(z), () => this.open(q));
+  }
+
+  open(q) {
+    const proto = location.protocol === "https:" ? "wss:" : "ws:";
     this.ws = new WebSocket(`${proto}//${location.host}/ws${q ? "?" + q : ""}`);
     this.ws.binaryType = "arraybuffer";
     this.ws.onopen = () => {

@@ -29,6 +29,7 @@ from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError
 
 from fogbank.model.errors import clean, error, from_validation
 from fogbank.model.fields import MAX_LAYERS
+from fogbank.model.urlstate import MAX_QUERY
 
 PROTOCOL = 1
 MAX_MESSAGE = 64 * 1024
@@ -46,7 +47,7 @@ class _Msg(BaseModel):
 
 class QueryMsg(_Msg):
     type: Literal["query"]
-    query: str = Field(max_length=16384)
+    query: str = Field(max_length=MAX_QUERY)
 
 
 class ParamsMsg(_Msg):

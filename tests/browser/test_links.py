@@ -1,0 +1,127 @@
+"""Links that survive length (issue 12, finding 5), in Debian's Chromium against a real
+uvicorn server on 127.0.0.1: a 12k-character look opens (before: a black view and an
+empty panel), its "Copy link" is the compact link that opens the same look, and a
+100k-character link gets the page that explains.
+
+The look each page shows is compared with the server's own reading of the readable
+link (urlstate.decode), never with what a page reported."""
+
+from __future__ import annotations
+
+import time
+from urllib.parse import parse_qsl, urlsplit
+
+import numpy as np
+import pytest
+
+from domain import long_look
+from fogbank.model.params import FogParams
+from fogbank.model.urlstate import LONG_QUERY, decode, encode
+from fogbank.settings import Settings
+from servers import Server
+from test_page import new_page, wait_frames
+
+# every control of the panel: its path, its kind and what it shows
+PANEL = """[...document.querySelectorAll('#controls [data-path]')].map((e) =>
+  [e.dataset.path, e.type, e.type === 'checkbox' ? e.checked : e.value])"""
+
+
+@pytest.fixture(scope="module")
+def server():
+    s = Server().start()
+    yield s
+    s.stop()
+
+
+def reading(kind: str, value):
+    """A control's value as the look holds it: a number, a bool, a list, or text."""
+    if kind == "number":
+        return float(value)
+    if kind == "text" and isinstance(value, str) and "," in value:
+        return [float(x) for x in value.split(",")]
+    return value
+
+
+def assert_shows(page, look: dict) -> None:
+    """The page's look is `look`, and so is every control of its panel, each layer's
+    included (compared with `look` itself, the reference)."""
+    assert page.evaluate("window.fogbank.params") == look
+    panel = page.evaluate(PANEL)
+    shown, wanted = {}, {}
+    for path, kind, value in panel:
+        v = look
+        for key in path.split("."):
+            v = v[int(key)] if isinstance(v, list) else v[key]
+        shown[path] = reading(kind, value)
+        wanted[path] = v if kind == "checkbox" else reading(kind, ", ".join(map(str, v)) if isinstance(v, list)
+                                                             else str(v))
+    assert shown == wanted
+    assert {p.split(".")[1] for p in shown if p.startswith("layers.")} == {str(i) for i in range(len(look["layers"]))}
+
+
+def wait_frame(page, timeout: float = 60) -> None:
+    """Until a frame is on the canvas (polled: the page's CSP forbids wait_for_function)."""
+    deadline = time.monotonic() + timeout
+    while int(page.locator("#view").get_attribute("data-frames") or 0) < 1:
+        assert time.monotonic() < deadline, "no frame came"
+        time.sleep(0.1)
+
+
+def test_a_long_look_opens_and_copy_link_gives_its_compact_link(server, browser):
+    fog = long_look(np.random.default_rng(5), 12000, enabled=1)
+    readable = encode(fog)
+    assert len(readable) >= 12000
+    look = FogParams.model_validate(decode(readable)[0]).model_dump(mode="json")
+    sockets, violations = [], []
+
+    def listen(p):
+        p.on("websocket", lambda ws: sockets.append(ws.url))
+        p.on("console", lambda m: violations.append(m.text) if "Content Security Policy" in m.text else None)
+    # under the page's own CSP: the compression and the module loaded on a click are allowed
+    page = new_page(browser, f"{server.url}/?{readable}&play=0", bypass_csp=False, before=listen)
+    wait_frame(page)
+    assert_shows(page, look)
+    assert page.locator("#notice").is_hidden()
+    # the stream was opened with the compact link, which fits a WebSocket request line
+    assert len(sockets) == 1 and "/ws?z=" in sockets[0] and len(sockets[0]) < len(readable) / 1.5
+    page.locator("#copy-link").click()
+    page.wait_for_selector("#toast:not([hidden])")
+    link = page.evaluate("navigator.clipboard.readText()")
+    query = urlsplit(link).query
+    assert [k for k, _ in parse_qsl(query)] == ["z", "play"]   # the page's keys stay readable
+    assert len(link) < len(readable) / 1.5
+    assert FogParams.model_validate(decode(query)[0]).model_dump(mode="json") == look
+    assert page.errors == [] and violations == []
+    page.context.close()
+    # the compact link opens the same look
+    page = new_page(browser, link)
+    wait_frames(page, 1)
+    assert_shows(page, look)
+    assert page.evaluate("window.fogbank.store.get().confirmed.playing") is False
+    assert page.errors == []
+    page.context.close()
+
+
+def test_a_short_look_keeps_its_readable_link(server, browser):
+    readable = "v=1&time=6&play=0&camera.yaw=20&density=1.5"
+    assert len(readable) <= LONG_QUERY
+    page = new_page(browser, f"{server.url}/?{readable}")
+    wait_frames(page, 1)
+    page.locator("#copy-link").click()
+    page.wait_for_selector("#toast:not([hidden])")
+    link = page.evaluate("navigator.clipboard.readText()")
+    assert link == page.url and "z=" not in link
+    page.context.close()
+
+
+def test_a_100k_link_gets_the_page_that_explains(server, browser):
+    target = "/?v=1&density=2&pad=" + "a" * 100_000
+    page = browser.new_context().new_page()
+    response = page.goto(server.url + target)
+    assert response.status == 414
+    assert page.locator("h1").inner_text() == "This link is too long"
+    limit = Settings().max_url_bytes
+    assert page.locator("#length").inner_text() == \
+        f"It is {len(target):,} characters long; this server takes links of at most {limit:,} characters."
+    assert "Copy link" in page.locator("main").inner_text()
+    page.context.close()
