@@ -84,11 +84,14 @@ def test_a_long_look_opens_and_copy_link_gives_its_compact_link(server, browser)
     assert page.locator("#notice").is_hidden()
     # the stream was opened with the compact link, which fits a WebSocket request line
     assert len(sockets) == 1 and "/ws?z=" in sockets[0] and len(sockets[0]) < len(readable) / 1.5
+    # the address bar follows the look in its compact form, so it can be copied as it is
+    page.wait_for_function("location.search.startsWith('?z=')")
+    assert FogParams.model_validate(decode(page.evaluate("location.search.slice(1)"))[0]).model_dump(mode="json") == look
     page.locator("#copy-link").click()
     page.wait_for_selector("#toast:not([hidden])")
     link = page.evaluate("navigator.clipboard.readText()")
     query = urlsplit(link).query
-    assert [k for k, _ in parse_qsl(query)] == ["z", "play"]   # the page's keys stay readable
+    assert [k for k, _ in parse_qsl(query)] == ["z", "play", "aspect"]   # the page's keys stay readable
     assert len(link) < len(readable) / 1.5
     assert FogParams.model_validate(decode(query)[0]).model_dump(mode="json") == look
     assert page.errors == [] and violations == []
@@ -110,7 +113,8 @@ def test_a_short_look_keeps_its_readable_link(server, browser):
     page.locator("#copy-link").click()
     page.wait_for_selector("#toast:not([hidden])")
     link = page.evaluate("navigator.clipboard.readText()")
-    assert link == page.url and "z=" not in link
+    stage = page.evaluate("document.getElementById('stage').clientWidth / document.getElementById('stage').clientHeight")
+    assert link == f"{page.url}&aspect={round(stage, 3):g}" and "z=" not in link
     page.context.close()
 
 

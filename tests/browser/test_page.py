@@ -439,6 +439,34 @@ def test_what_you_share_and_download_is_what_you_see(server, browser):
     w, h = int(m.group(1)), int(m.group(2))
     assert max(w, h) == 1920
     assert abs(w / h - stage[0] / stage[1]) <= 0.01
+    # the link carries the framing: opened in a window of another shape, the view keeps
+    # the link's aspect (letterboxed), and so does its download, until "Fit to window"
+    aspect = float(re.search(r"[?&]aspect=([0-9.]+)", link).group(1))
+    assert abs(aspect - stage[0] / stage[1]) <= 0.002
+    ctx.close()
+    ctx = browser.new_context(viewport={"width": 1500, "height": 600}, bypass_csp=True, accept_downloads=True)
+    page = ctx.new_page()
+    errors = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.goto(link.replace("play=1", "play=0") + ("&play=0" if "play=" not in link else ""))
+    wait_frames(page, 1)
+    assert page.locator("#framing").is_visible()
+    page.wait_for_function("(a) => { const c = document.getElementById('view');"
+                           " return Math.abs(c.width / c.height - a) < 0.01; }", arg=aspect)
+    assert f"aspect={aspect:g}" in page.evaluate("location.search")
+    page.locator("#more > summary").click()
+    with page.expect_download() as d:
+        page.locator("#download").click()
+    m = re.search(r"fogbank-(\d+)x(\d+)\.png", d.value.suggested_filename)
+    assert abs(int(m.group(1)) / int(m.group(2)) - aspect) <= 0.01
+    page.locator("#more > summary").click()
+    page.locator("#fit-window").click()
+    stage = page.evaluate("[document.getElementById('stage').clientWidth, document.getElementById('stage').clientHeight]")
+    page.wait_for_function("(a) => { const c = document.getElementById('view');"
+                           " return Math.abs(c.width / c.height - a) < 0.01; }", arg=min(3, stage[0] / stage[1]))
+    assert not page.locator("#framing").is_visible()
+    assert "aspect=" not in page.evaluate("location.search")
+    assert errors == []
     ctx.close()
 
 

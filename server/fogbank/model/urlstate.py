@@ -39,7 +39,7 @@ from fogbank.model.params import LAYER_CLASSES, FogParams, StillParams
 
 VERSION = 1
 # Page-only keys: how the page plays the look, not the look. A still ignores them.
-VIEW_KEYS = ("play", "speed")
+VIEW_KEYS = ("play", "speed", "aspect")   # aspect: the framing the link was copied with
 _SAFE = ",.-_~"
 _HEX = re.compile(r"^#[0-9a-f]{6}$")
 _NUMBER = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?|[+-]?(inf|nan|infinity)", re.I | re.A)

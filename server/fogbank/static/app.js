@@ -6,6 +6,7 @@
 import { Stream } from "./stream.js";
 import { Controls, buildPatch } from "./controls.js";
 import { UndoStack } from "./undo.js";
+import { compactQuery, isLong } from "./links.js";
 import { CameraInput } from "./camera.js";
 import { store, version, playing, simTime } from "./store.js";
 
@@ -250,8 +251,7 @@ $("reset-camera").addEventListener("click", () => {
 // the URL and the toolbar show the look the server last confirmed
 function showConfirmed(c) {
   showAbout(c);
-  const q = c.query === "v=1" ? "" : c.query;
-  if (location.search.slice(1) !== q) history.replaceState(null, "", q ? `?${q}` : location.pathname);
+  writeAddress(c.query);
   $("play").textContent = c.playing ? "Pause" : "Play";
   $("play").setAttribute("aria-pressed", String(c.playing));
   $("speed").value = String(c.speed);
@@ -260,9 +260,39 @@ function showConfirmed(c) {
   $("preset").value = match ? match.name : "";
 }
 
+// The address bar follows the confirmed look, with the framing when it is the link's;
+// compact (links.js) when the readable query is long, so that it can be copied as it is.
+async function writeAddress(query) {
+  let q = query === "v=1" ? "" : query;
+  const { framing } = store.get();
+  if (framing) q += `${q ? "&" : ""}aspect=${Math.round(framing * 1000) / 1000}`;
+  if (isLong(q)) q = await compactQuery(q);
+  if (store.get().confirmed?.query !== query) return;   // a newer look came meanwhile
+  if (location.search.slice(1) !== q) history.replaceState(null, "", q ? `?${q}` : location.pathname);
+}
+// the framing of the link the page was opened with
+{
+  const a = Number(new URLSearchParams(location.search).get("aspect"));
+  if (a >= 0.25 && a <= 4) store.set({ framing: a });
+}
+function showFraming() {
+  const { framing } = store.get();
+  $("framing").hidden = !framing;
+  if (framing) $("framing-text").textContent = `Framed as the link, ${framing.toFixed(2)}:1`;
+}
+$("fit-window").addEventListener("click", () => {
+  store.set({ framing: null });
+  const c = store.get().confirmed;
+  if (c) writeAddress(c.query);
+  sendView();
+  showViewSize();
+});
+store.subscribe((s, prev) => { if (s.framing !== prev.framing) showFraming(); });
+showFraming();
+
 // a query without the keys that say where the animation is, not what it shows
 function lookOf(query) {
-  return query.split("&").filter((kv) => !/^(play|speed|time)=/.test(kv)).join("&");
+  return query.split("&").filter((kv) => !/^(play|speed|time|aspect)=/.test(kv)).join("&");
 }
 
 // the time slider (unless it is being dragged) and the canvas's data-* follow the frames
@@ -304,9 +334,9 @@ $("time").addEventListener("change", () => { store.set({ scrubbing: false }); })
 async function shareLink() {
   const q = new URLSearchParams(location.search);
   if (playing(store.get()) && store.get().lastFrame) q.set("time", String(Math.round(simTime(store.get()) * 1000) / 1000));
+  q.set("aspect", String(Math.round(viewAspect() * 1000) / 1000));
   let text = q.toString().replace(/%2C/g, ",");
-  const links = await import("./links.js");   // loaded already: stream.js imports it
-  if (links.isLong(text)) text = await links.compactQuery(text);
+  if (isLong(text)) text = await compactQuery(text);
   return `${location.origin}${location.pathname}${text ? `?${text}` : ""}`;
 }
 $("copy-link").addEventListener("click", async () => {
@@ -322,8 +352,7 @@ $("copy-link").addEventListener("click", async () => {
 function stillSize() {
   const v = $("still-size").value;
   if (v !== "view") return v.split("x").map(Number);
-  const stage = $("stage");
-  const aspect = Math.max(0.25, Math.min(4, stage.clientWidth / Math.max(1, stage.clientHeight)));
+  const aspect = viewAspect();
   return aspect >= 1 ? [1920, Math.round(1920 / aspect / 2) * 2] : [Math.round(1920 * aspect / 2) * 2, 1920];
 }
 function showViewSize() {
@@ -332,14 +361,18 @@ function showViewSize() {
   opt.textContent = $("still-size").value === "view" ? `as the view, ${w}×${h}` : "as the view";
 }
 $("still-size").addEventListener("change", showViewSize);
-$("download").addEventListener("click", () => {
+$("download").addEventListener("click", async () => {
   const [w, h] = stillSize();
-  const q = new URLSearchParams(location.search);
+  // the confirmed look (readable), at the time on screen and the view's shape; compact
+  // when long, with the size inside z (only play, speed, time, aspect stand beside it)
+  const q = new URLSearchParams(store.get().confirmed.query);
   q.set("time", String(Math.round(simTime(store.get()) * 1000) / 1000));
   q.set("width", String(w));
   q.set("height", String(h));
+  let text = q.toString();
+  if (isLong(text)) text = await compactQuery(text);
   const a = document.createElement("a");
-  a.href = `/api/still.png?${q}`;
+  a.href = `/api/still.png?${text}`;
   a.download = `fogbank-${w}x${h}.png`;
   document.body.append(a);
   a.click();
@@ -358,9 +391,18 @@ addEventListener("resize", debounce(() => { sendView(); showViewSize(); }, 150))
 // chosen height. The cap is 1280x720's pixels: what the server streams smoothly (docs/bench.md).
 const STREAM_PIXELS = 1280 * 720;
 const even = (v) => Math.max(16, Math.round(v / 2) * 2);
+// The view's shape: the framing of the link it was opened with (kept until "Fit to
+// window"), else the stage's. What you see is what you share: the link and the
+// download carry it.
+function viewAspect() {
+  const { framing } = store.get();
+  if (framing) return framing;
+  const stage = $("stage");
+  return Math.max(0.5, Math.min(3, stage.clientWidth / Math.max(1, stage.clientHeight)));
+}
 function viewSize() {
   const stage = $("stage");
-  const aspect = Math.max(0.5, Math.min(3, stage.clientWidth / Math.max(1, stage.clientHeight)));
+  const aspect = viewAspect();
   const choice = $("stream-size").value;
   if (choice === "auto") {
     const dpr = window.devicePixelRatio || 1;

@@ -1,7 +1,7 @@
 // Compact links: a long look's query as z=<base64url, no padding, of the raw deflate of
 // the readable query>, made here with the browser's own CompressionStream (no library).
-// The keys that say how the animation plays and where it is (play, speed, time) stay
-// readable beside z. The server reads z as the readable query it holds
+// The keys that say how the animation plays and where it is (play, speed, time), and the
+// framing (aspect), stay readable beside z. The server reads z as the readable query it holds
 // (server/fogbank/model/urlstate.py: compact, inflate).
 
 // Past this many characters a link is given compact; shorter looks keep the readable
@@ -10,7 +10,7 @@
 // refuse them; compacting shrinks a look's text to 20-65%. Kept equal to urlstate's
 // LONG_QUERY (tests/unit/test_urlstate.py checks).
 export const LONG_QUERY = 2000;
-const BESIDE_Z = new Set(["play", "speed", "time"]);
+const BESIDE_Z = new Set(["play", "speed", "time", "aspect"]);
 
 export function isLong(query) {
   return query.replace(/^\?/, "").length > LONG_QUERY;
