@@ -222,3 +222,23 @@ def test_a_suggested_layer_suits_the_look_and_an_unknown_kind_is_named(client):
     r = client.post("/api/layers/suggest", json={"kind": "box", "params": {"density": 99}})
     assert r.status_code == 422
     assert r.json()["detail"][0]["loc"][-1] == "density"
+
+
+def test_the_plot_and_profile_endpoints_answer_and_name_bad_fields(client):
+    r = client.post("/api/plot/ray", json={"params": {"scene": "calibration"}, "x": 10, "y": 5,
+                                           "width": 64, "height": 36})
+    assert r.status_code == 200
+    body = r.json()
+    assert len(body["s"]) == len(body["T"]) and body["hit"] in ("ground", "sky")
+    r = client.post("/api/plot/ray", json={"x": 64, "y": 5, "width": 64, "height": 36})
+    assert r.status_code == 422 and "outside the 64x36 view" in r.json()["detail"][0]["msg"]
+    r = client.post("/api/plot/ray", json={"params": {"density": -1}, "x": 1, "y": 1, "width": 64, "height": 36})
+    assert r.status_code == 422 and r.json()["detail"][0]["loc"][:3] == ["body", "params", "density"]
+    r = client.post("/api/layers/profile", json={"layer": {"kind": "polynomial"}, "points": [1, 1, 0.5, 1, 1]})
+    assert r.status_code == 200 and len(r.json()["fitted"]["coeffs"]) == 5
+    r = client.post("/api/layers/profile", json={"layer": {"kind": "height"}})
+    assert r.status_code == 422 and r.json()["detail"][0]["loc"] == ["body", "layer", "kind"]
+    r = client.post("/api/layers/profile", json={"layer": {"kind": "polynomial"}, "points": [1, 2]})
+    assert r.status_code == 422 and r.json()["detail"][0]["loc"] == ["body", "points"]
+    r = client.post("/api/layers/profile", json={"layer": {"kind": "cosine", "c0": -1}})
+    assert r.status_code == 422 and r.json()["detail"][0]["loc"][:3] == ["body", "layer", "c0"]

@@ -9,7 +9,7 @@ import logging
 from collections import OrderedDict
 from contextlib import asynccontextmanager
 from pathlib import Path
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 import fastapi_offline
 import numpy as np
@@ -35,6 +35,8 @@ from fogbank.render.encode import MEDIA_TYPES
 from fogbank.service.limits import RequestLimits
 from fogbank.model.params import LAYER_CLASSES, FogParams, StillParams
 from fogbank.model.suggest import suggest_layer
+from fogbank.model.layer_profile import KINDS_EDITED, profile
+from fogbank.model.ray_plot import plot_ray
 from fogbank.model.fields import RAY_LIMIT, Direction, Position, Strict
 from fogbank.service.security import SecurityHeaders, origin_allowed
 from fogbank.workers.supervisor import Supervisor, WorkerError
@@ -61,6 +63,28 @@ class SuggestRequest(Strict):
     kind: Literal[tuple(LAYER_CLASSES)] = Field(description="the new layer's kind")   # type: ignore[valid-type]
     params: dict[str, Any] = Field(default_factory=dict,
                                    description="the look it joins: a patch over the default preset")
+
+
+class RayPlotRequest(Strict):
+    params: dict[str, Any] = Field(default_factory=dict,
+                                   description="the look: a patch over the default preset")
+    x: float = Field(ge=0, le=4096, strict=True, description="the pixel's column, from the left (px)")
+    y: float = Field(ge=0, le=4096, strict=True, description="the pixel's row, from the top (px)")
+    width: int = Field(ge=16, le=4096, strict=True, description="the view's width (px)")
+    height: int = Field(ge=16, le=4096, strict=True, description="the view's height (px)")
+
+    @model_validator(mode="after")
+    def _inside(self) -> "RayPlotRequest":
+        if self.x >= self.width or self.y >= self.height:
+            raise ValueError(f"the pixel ({self.x:g}, {self.y:g}) is outside the {self.width}x{self.height} view")
+        return self
+
+
+class LayerProfileRequest(Strict):
+    layer: dict[str, Any] = Field(description=f"a layer of kind {' or '.join(KINDS_EDITED)}")
+    points: list[Annotated[float, Field(strict=True, ge=-1e6, le=1e6)]] | None = Field(None, max_length=32,
+                                       description="new values at the profile's points (the editor's drag); "
+                                                   "the coefficients follow")
 
 
 class TransmittanceRequest(Strict):
@@ -341,6 +365,31 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         # loop stays free and a burst of requests takes one core at most
         async with suggest_lock:
             return await asyncio.to_thread(suggest_layer, req.kind, fog)
+
+    @app.post("/api/plot/ray", response_model=dict[str, Any], responses={413: TOO_LARGE},
+              summary="The ray under a pixel, in float64: each layer's density along it and T(s)")
+    async def ray_plot(req: RayPlotRequest):
+        fog = resolve(req.params, FogParams, ("body", "params"))
+        async with suggest_lock:   # float64 numpy on a thread, one at a time
+            return await asyncio.to_thread(plot_ray, fog, req.x, req.y, req.width, req.height)
+
+    @app.post("/api/layers/profile", response_model=dict[str, Any], responses={413: TOO_LARGE},
+              summary="A polynomial or cosine layer's density along its axis, the points that shape "
+                      "it, the coefficients they give, and the rules a shape breaks (Biri's Fig. 2 editor)")
+    async def layer_profile(req: LayerProfileRequest):
+        kind = req.layer.get("kind")
+        if kind not in KINDS_EDITED:
+            raise RequestValidationError([errors.error(("body", "layer", "kind"),
+                                                       f"the editor shapes {' and '.join(KINDS_EDITED)} layers, "
+                                                       f"not {kind!r}", "literal_error")])
+        try:
+            layer = LAYER_CLASSES[kind].model_validate(req.layer)
+        except ValidationError as exc:
+            raise _validation_error(exc, ("body", "layer")) from None
+        try:
+            return profile(layer, req.points)
+        except ValueError as exc:
+            raise RequestValidationError([errors.error(("body", "points"), str(exc), "value_error")]) from None
 
     @app.get("/api/schema", summary="JSON Schema of the params (ranges, slider steps, units)")
     async def schema():

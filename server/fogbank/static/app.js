@@ -7,6 +7,8 @@ import { Stream } from "./stream.js";
 import { Controls, buildPatch } from "./controls.js";
 import { UndoStack } from "./undo.js";
 import { compactQuery, isLong } from "./links.js";
+import { functionEditor } from "./editor.js";
+import { rayPlot } from "./rayplot.js";
 import { CameraInput } from "./camera.js";
 import { store, version, playing, simTime } from "./store.js";
 
@@ -125,6 +127,12 @@ const controls = new Controls($("controls"), schema, (path, value) => {
 }, addLayer);
 controls.onChange.interact = setInteract;
 controls.ctx.cameraBounds = cameraBounds;
+// the function editor of a polynomial or cosine layer: a shape that breaks no rule
+// patches the layer as it is now
+controls.ctx.functionEditor = (path, item) => functionEditor(item, (fitted) => {
+  const current = path.reduce((v, k) => v[k], store.get().params);
+  controls.onChange(path, { ...current, ...fitted });
+});
 
 // "Add layer": the server suggests one that suits the look (placed in front of the
 // camera, thin enough never to white out the view); each click appends to the list as it
@@ -434,6 +442,10 @@ $("show-layer").addEventListener("change", () => {
   sendView();
 });
 stream.addEventListener("view_stats", (e) => store.set({ viewStats: e.detail }));
+// the plot panel: each layer's density and T along the ray under the cursor
+rayPlot(canvas, $("plot"), () => store.get().params, () => store.get().probe);
+$("probe").addEventListener("change", () => store.set({ probe: $("probe").checked }));
+store.subscribe((s, prev) => { if (s.probe !== prev.probe) $("plot").hidden = !s.probe; });
 store.subscribe((s, prev) => {
   if (s.params && (s.params.layers !== prev.params?.layers || s.show !== prev.show)) showLayers(s);
   if (s.viewStats !== prev.viewStats || s.show !== prev.show) showLegend(s);

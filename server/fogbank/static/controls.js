@@ -298,6 +298,14 @@ function listControl(schema, path, node, value, onChange, ctx) {
       btn("✕", "Remove", () => set(value.filter((_, j) => j !== i))));
     det.append(el("summary", {}, el("span", { class: "name" }, name), tools));
     if (sub.source) det.append(kindHelp(sub));
+    // Biri's Fig. 2: the function editor for the kinds whose shape is a function
+    if (ctx.functionEditor && (item.kind === "polynomial" || item.kind === "cosine")) {
+      const shape = el("details", { class: "shape" }, el("summary", {}, "Shape the function (drag its points)"));
+      shape.addEventListener("toggle", () => {
+        if (shape.open && !shape.querySelector(".function-editor")) shape.append(ctx.functionEditor(gpath, item));
+      }, { once: false });
+      det.append(shape);
+    }
     for (const [fname, fnode] of Object.entries(sub.properties || {})) {
       if (fname === "enabled") continue;
       const f = field(schema, [...gpath, fname], fnode, item[fname], onChange, ctx);

@@ -43,6 +43,7 @@ export const store = createStore({
   show: "shaded",       // what the frames show: the look, or a view that teaches
   showLayer: 0,         // the layer whose optical depth is shown
   viewStats: null,      // the numbers and legend of the last view that teaches
+  probe: false,         // the plot panel follows the ray under the cursor
   framing: null,        // the view's aspect (width / height) from the link opened, or null: the window's
 });
 
