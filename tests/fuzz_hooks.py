@@ -75,6 +75,21 @@ def filter_case(ctx, case) -> bool:
         return _look_ok(body.get("params", {}))
     if body is not None and "kind" in body:   # /api/layers/suggest: a kind and a look
         return _look_ok(body.get("params", {}))
+    if body is not None and "x" in body:      # /api/plot/ray: a pixel inside the view, a look
+        try:
+            inside = float(body["x"]) < float(body["width"]) and float(body["y"]) < float(body["height"])
+        except (KeyError, TypeError, ValueError):
+            return True
+        return inside and _look_ok(body.get("params", {}))
+    if body is not None and "layer" in body:  # /api/layers/profile: a valid layer, points to match
+        layer, points = body.get("layer"), body.get("points")
+        if not isinstance(layer, dict) or not _look_ok({"layers": [layer]}):
+            return False
+        if points is None:
+            return True
+        n = (len(layer.get("coeffs", [0.8, -1.0, 0.0, 0.0, 1.0])) if layer.get("kind") == "polynomial"
+             else 2 * (len(layer.get("terms", [{}])) + 1))
+        return isinstance(points, list) and len(points) == n
     return _look_ok(body)
 
 
@@ -84,8 +99,11 @@ def map_case(ctx, case):
         return case
     for holder in (case.query, case.body):
         if isinstance(holder, dict):
-            for k in ("width", "height"):
+            for k, at in (("width", "x"), ("height", "y")):
                 v = holder.get(k)
                 if isinstance(v, (int, float)) and not isinstance(v, bool) and v > MAX_SIDE:
                     holder[k] = type(v)(MAX_SIDE)
+                    p = holder.get(at)   # a pixel of the view (/api/plot/ray) scales with it
+                    if isinstance(p, (int, float)) and not isinstance(p, bool):
+                        holder[at] = p * MAX_SIDE / v
     return case

@@ -14,14 +14,6 @@ import pytest
 from fogbank.kinds import KINDS
 from fogbank.model import presets as P
 from pages import new_page, wait_frames, wait_quiet
-from servers import Server
-
-
-@pytest.fixture(scope="module")
-def server():
-    s = Server().start()
-    yield s
-    s.stop()
 
 
 @pytest.fixture(scope="module")

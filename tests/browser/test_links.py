@@ -12,25 +12,16 @@ import time
 from urllib.parse import parse_qsl, urlsplit
 
 import numpy as np
-import pytest
 
 from domain import long_look
 from fogbank.model.params import FogParams
 from fogbank.model.urlstate import LONG_QUERY, decode, encode
 from fogbank.settings import Settings
-from servers import Server
 from test_page import new_page, wait_frames
 
 # every control of the panel: its path, its kind and what it shows
 PANEL = """[...document.querySelectorAll('#controls [data-path]')].map((e) =>
   [e.dataset.path, e.type, e.type === 'checkbox' ? e.checked : e.value])"""
-
-
-@pytest.fixture(scope="module")
-def server():
-    s = Server().start()
-    yield s
-    s.stop()
 
 
 def reading(kind: str, value):

@@ -13,14 +13,6 @@ import pytest
 from hand import hand_rays
 from fogbank.model.params import Camera
 from pages import new_page, wait_frames, wait_quiet
-from servers import Server
-
-
-@pytest.fixture(scope="module")
-def server():
-    s = Server().start()
-    yield s
-    s.stop()
 
 
 def test_the_plot_panel_follows_the_ray_under_the_cursor(server, browser):

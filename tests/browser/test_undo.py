@@ -8,17 +8,8 @@ from __future__ import annotations
 import json
 import urllib.request
 
-import pytest
 
 from pages import drag_view, new_page, panel_and_state, wait_frames, wait_quiet
-from servers import Server
-
-
-@pytest.fixture(scope="module")
-def server():
-    s = Server().start()
-    yield s
-    s.stop()
 
 
 def _get(server, path):

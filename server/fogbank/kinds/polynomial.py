@@ -9,7 +9,7 @@ r = u - 2Cn, continuous at every border by construction and periodic in 4C."""
 from __future__ import annotations
 
 import math
-from typing import Literal
+from typing import Annotated, Literal
 
 import numpy as np
 from numpy.polynomial import polynomial as npoly
@@ -18,9 +18,11 @@ from pydantic import ConfigDict, Field, model_validator
 from fogbank.kinds.kind import Kind, Layout
 from fogbank.kinds.rays import slide
 from fogbank.kinds.reduce import EXACT_ABOVE, coordinate_at, taylor_shift
-from fogbank.model.fields import LayerBase, Num, Wave, num
+from fogbank.model.fields import LayerBase, Wave, num
 
 MAX_POLY_COEFFS = 8
+# a coefficient: finite, |c| <= 1e6 (the schema states it; P's float32 sums stay exact enough)
+Coeff = Annotated[float, Field(strict=True, ge=-1e6, le=1e6)]
 
 
 def poly_min(coeffs: list[float], lo: float, hi: float) -> float:
@@ -44,7 +46,7 @@ class Polynomial(LayerBase):
     summary = "Fog shaped by a polynomial over one tile along an axis, mirrored or repeated across the scene."
     formula = r"\rho(\mathbf{x}) = \rho\, P(u), \quad P(u) = \sum_i p_i u^i, \quad u = \mathbf{a} \cdot \mathbf{x} + b \in [-C, C]"
     density: float = num(0.02, 0, 10, 0.0005, "1/m", "weight c_i", title="density ρ")
-    coeffs: list[Num] = Field([0.8, -1.0, 0.0, 0.0, 1.0], min_length=1,
+    coeffs: list[Coeff] = Field([0.8, -1.0, 0.0, 0.0, 1.0], min_length=1,
                                 max_length=MAX_POLY_COEFFS, title="coefficients pᵢ",
                                 description="P(u) = sum coeffs[i] u^i (ascending powers)")
     axis: tuple[Wave, Wave, Wave] = Field((1.0 / 60.0, 0.0, 0.0), title="axis a", description="u = axis . x + offset, 1/m")

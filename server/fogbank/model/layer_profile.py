@@ -47,11 +47,11 @@ def _polynomial(layer, points: list[float] | None) -> dict[str, Any]:
             raise ValueError(f"points: {len(knots)} values (P at u = {', '.join(f'{k:g}' for k in knots)}), "
                              f"got {len(points)}")
         coeffs = npoly.polyfit(knots, np.asarray(points, dtype=np.float64), n) if n else np.array([points[0]])
-    shaped = layer.model_construct(**{**dict(layer), "coeffs": [float(c) for c in coeffs], "density": 1.0})
-    a = np.asarray(layer.axis, dtype=np.float64)
-    norm = float(np.linalg.norm(a))
+    # the shape in u alone: the same layer with u = x (axis (1, 0, 0), no offset), density 1
+    shaped = layer.model_construct(**{**dict(layer), "coeffs": [float(c) for c in coeffs], "density": 1.0,
+                                      "axis": (1.0, 0.0, 0.0), "offset": 0.0, "wind": False})
     u = np.linspace(-3 * C, 3 * C, SAMPLES)
-    x = ((u - layer.offset) / norm)[:, None] * (a / norm)[None, :]   # points whose u is u
+    x = np.stack([u, np.zeros_like(u), np.zeros_like(u)], axis=1)
     problems = []
     low = poly_min(list(coeffs), -C, C)
     if low < -1e-9:
@@ -87,7 +87,7 @@ def _cosine(layer, points: list[float] | None) -> dict[str, Any]:
             raise ValueError(f"points: {m} values (rho / density at {m} positions over one period), got {len(points)}")
         c = np.linalg.lstsq(basis, np.asarray(points, dtype=np.float64), rcond=None)[0]
     terms = [t.model_copy(update={"amp": float(a)}) for t, a in zip(layer.terms, c[1:])]
-    shaped = layer.model_construct(**{**dict(layer), "c0": float(c[0]), "terms": terms, "density": 1.0})
+    shaped = layer.model_construct(**{**dict(layer), "c0": float(c[0]), "terms": terms, "density": 1.0, "wind": False})
     s = np.linspace(0.0, 2 * period, SAMPLES)
     rho = _density(shaped, s[:, None] * direction[None, :])
     problems = []

@@ -9,7 +9,7 @@ import logging
 from collections import OrderedDict
 from contextlib import asynccontextmanager
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, Literal, Union
 
 import fastapi_offline
 import numpy as np
@@ -37,7 +37,7 @@ from fogbank.model.params import LAYER_CLASSES, FogParams, StillParams
 from fogbank.model.suggest import suggest_layer
 from fogbank.model.layer_profile import KINDS_EDITED, profile
 from fogbank.model.ray_plot import plot_ray
-from fogbank.model.fields import RAY_LIMIT, Direction, Position, Strict
+from fogbank.model.fields import RAY_LIMIT, Direction, Int, Position, Strict
 from fogbank.service.security import SecurityHeaders, origin_allowed
 from fogbank.workers.supervisor import Supervisor, WorkerError
 from fogbank.settings import Settings, get_settings
@@ -70,8 +70,8 @@ class RayPlotRequest(Strict):
                                    description="the look: a patch over the default preset")
     x: float = Field(ge=0, le=4096, strict=True, description="the pixel's column, from the left (px)")
     y: float = Field(ge=0, le=4096, strict=True, description="the pixel's row, from the top (px)")
-    width: int = Field(ge=16, le=4096, strict=True, description="the view's width (px)")
-    height: int = Field(ge=16, le=4096, strict=True, description="the view's height (px)")
+    width: Int = Field(ge=16, le=4096, description="the view's width (px)")
+    height: Int = Field(ge=16, le=4096, description="the view's height (px)")
 
     @model_validator(mode="after")
     def _inside(self) -> "RayPlotRequest":
@@ -80,8 +80,11 @@ class RayPlotRequest(Strict):
         return self
 
 
+EditedLayer = Annotated[Union[tuple(LAYER_CLASSES[k] for k in KINDS_EDITED)], Field(discriminator="kind")]
+
+
 class LayerProfileRequest(Strict):
-    layer: dict[str, Any] = Field(description=f"a layer of kind {' or '.join(KINDS_EDITED)}")
+    layer: EditedLayer = Field(description=f"a layer of kind {' or '.join(KINDS_EDITED)}")  # type: ignore[valid-type]
     points: list[Annotated[float, Field(strict=True, ge=-1e6, le=1e6)]] | None = Field(None, max_length=32,
                                        description="new values at the profile's points (the editor's drag); "
                                                    "the coefficients follow")
@@ -377,17 +380,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
               summary="A polynomial or cosine layer's density along its axis, the points that shape "
                       "it, the coefficients they give, and the rules a shape breaks (Biri's Fig. 2 editor)")
     async def layer_profile(req: LayerProfileRequest):
-        kind = req.layer.get("kind")
-        if kind not in KINDS_EDITED:
-            raise RequestValidationError([errors.error(("body", "layer", "kind"),
-                                                       f"the editor shapes {' and '.join(KINDS_EDITED)} layers, "
-                                                       f"not {kind!r}", "literal_error")])
         try:
-            layer = LAYER_CLASSES[kind].model_validate(req.layer)
-        except ValidationError as exc:
-            raise _validation_error(exc, ("body", "layer")) from None
-        try:
-            return profile(layer, req.points)
+            return profile(req.layer, req.points)
         except ValueError as exc:
             raise RequestValidationError([errors.error(("body", "points"), str(exc), "value_error")]) from None
 

@@ -114,11 +114,17 @@ def build(app) -> dict[str, Any]:
         "schema": {"$ref": REF.format(model="StillParams")}}},
         "description": "StillParams fields, a patch over the default preset"}
     post_still["description"] = (post_still.get("description", "") + "\n\n" + RULES).strip()
-    for name in ("TransmittanceRequest", "SuggestRequest"):
+    for name in ("TransmittanceRequest", "SuggestRequest", "RayPlotRequest"):
         req = schemas.get(name)
         if req:
             req["properties"]["params"] = {"$ref": REF.format(model="FogParams"),
                                            "description": "a patch over the default preset"}
     paths["/api/transmittance"]["post"]["description"] = RULES
     paths["/api/layers/suggest"]["post"]["description"] = RULES
+    paths["/api/plot/ray"]["post"]["description"] = (
+        "The pixel (x, y) is inside the view: x < width and y < height (422 otherwise). " + RULES)
+    paths["/api/layers/profile"]["post"]["description"] = (
+        "points, when given, holds one value per point of the layer's profile: degree + 1 for a "
+        "polynomial (len(coeffs)), 2 (len(terms) + 1) for a cosine (422 naming points otherwise). "
+        "A shape that breaks a rule is not refused: it is answered with its problems. " + RULES)
     return doc

@@ -10,7 +10,7 @@
 // refuse them; compacting shrinks a look's text to 20-65%. Kept equal to urlstate's
 // LONG_QUERY (tests/unit/test_urlstate.py checks).
 export const LONG_QUERY = 2000;
-const BESIDE_Z = new Set(["play", "speed", "time", "aspect"]);
+const BESIDE_Z = new Set(["play", "speed", "aspect", "time"]);
 
 export function isLong(query) {
   return query.replace(/^\?/, "").length > LONG_QUERY;
