@@ -548,3 +548,37 @@ def test_views_that_teach_replace_the_frame_and_show_their_scale(server, browser
     page.wait_for_function("document.getElementById('legend').hidden")
     assert page.errors == []
     page.context.close()
+
+
+def test_a_costly_look_blurs_its_preview_while_dragged_not_the_frame_rate(server, browser):
+    """Finding 4: with 7-9 layers the stream fell to 2-9 fps. While the view is dragged,
+    previews that cost more than the budget are drawn smaller (scaled up on the canvas,
+    "refining…" shown); when the drag ends, the full frame is the stream's own size."""
+    layers = [("height", ""), ("cosine", ""), ("potential", ""), ("sphere", ""), ("box", ""),
+              ("ellipsoid", ""), ("homogeneous", "&layers.6.density=0.002"), ("polynomial", "")]
+    q = f"v=1&play=0&layers={len(layers)}" + "".join(f"&layers.{i}.kind={k}{x}" for i, (k, x) in enumerate(layers))
+    page = new_page(browser, f"{server.url}/?{q}")
+    wait_frames(page, 1)
+    wait_full_frame_of_current_version(page)
+    full = page.evaluate("[window.fogbank.store.get().lastFrame.width, window.fogbank.store.get().lastFrame.height]")
+    page.evaluate("window.__frames = []; window.fogbank.store.subscribe((s, p) => {"
+                  " if (s.lastFrame !== p.lastFrame) window.__frames.push([s.lastFrame.width, s.lastFrame.full]); }); 0")
+    box = page.locator("#view").bounding_box()
+    x, y = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
+    page.mouse.move(x, y)
+    page.mouse.down()
+    refining = False
+    for i in range(40):
+        page.mouse.move(x + 3 * i, y)
+        time.sleep(0.05)
+        refining = refining or page.locator("#stat-refining").is_visible()
+    page.mouse.up()
+    wait_full_frame_of_current_version(page)
+    frames = page.evaluate("window.__frames")
+    previews = [w for w, is_full in frames if not is_full]
+    assert len(previews) >= 5 and refining
+    assert min(previews) < full[0]                   # smaller while dragged
+    assert frames[-1] == [full[0], True]              # the refinement: the stream's own size
+    assert page.evaluate("[document.getElementById('view').width, document.getElementById('view').height]") == full
+    assert page.errors == []
+    page.context.close()

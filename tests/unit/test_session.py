@@ -4,7 +4,7 @@ preview while dragging and the refinement after, play/pause and seek."""
 from __future__ import annotations
 
 from fogbank.stream.protocol import parse
-from fogbank.stream.session import INPUT_SETTLE_S, MAX_IN_FLIGHT, Session
+from fogbank.stream.session import INPUT_SETTLE_S, MAX_IN_FLIGHT, PREVIEW_BUDGET_MS, Session
 
 
 def msg(text):
@@ -65,6 +65,51 @@ def test_preview_then_refinement():
     s.frame_done(refine, sent=True)
     s.apply(msg(f'{{"type": "ack", "frame": {refine.frame}}}'), t)
     assert s.next_due(t + 1) is None                    # paused, nothing new: no frames
+
+
+def test_a_costly_look_is_previewed_smaller_and_refined_at_full_size():
+    """Issue 12, finding 4: a look too costly for live streaming degrades its preview, not
+    the page's frame rate. A preview over the budget makes the next a step smaller, one
+    with a fifth to spare a step larger (unless that size was just measured over it); the
+    refinement after input stops is the view's size."""
+    s = Session("a", now=0.0)
+    s.apply(msg('{"type": "play", "playing": false}'), 0.0)
+    s.apply(msg('{"type": "view", "width": 960, "height": 540}'), 0.0)
+    s.apply(msg('{"type": "interact", "active": true}'), 0.0)
+    t = 0.0
+
+    def preview(cost):
+        """A preview frame whose render takes cost(its width) ms: its size."""
+        nonlocal t
+        t += 0.1
+        s.apply(msg('{"type": "camera", "camera": {"yaw": %s}}' % t), t)
+        job = s.start_frame(t)
+        assert not job.full
+        s.measured(job, cost(job.still.width), t)
+        s.frame_done(job, sent=True)
+        s.apply(msg(f'{{"type": "ack", "frame": {job.frame}}}'), t)
+        return job.still.width, job.still.height
+
+    def sized(k):
+        return 2 * round(960 * k / 2), 2 * round(540 * k / 2)
+
+    # 30 ms fixed + 100 ms for the whole view's pixels: by hand, 30 + 100 k^2 <= 60 holds
+    # for k = 0.5 (55 ms) and not 0.75 (86 ms)
+    costly = lambda w: 30.0 + 100.0 * (w / 960) ** 2   # noqa: E731
+    sizes = [preview(costly) for _ in range(8)]
+    assert sizes[:3] == [sized(1.0), sized(0.75), sized(0.5)]
+    assert set(sizes[2:]) == {sized(0.5)}        # 55 ms: no room for a fifth more; 0.75 known over
+    assert 30 + 100 * 0.5 ** 2 <= PREVIEW_BUDGET_MS < 30 + 100 * 0.75 ** 2
+    # the look got cheap: it grows back a step at a time
+    cheap = lambda w: 10.0 + 20.0 * (w / 960) ** 2   # noqa: E731
+    t += 3.0   # past the time a measured cost is trusted
+    assert [preview(cheap) for _ in range(4)] == [sized(0.5), sized(0.75), sized(1.0), sized(1.0)]
+    # input stops: the refinement is the view's own size, whatever the previews were
+    for _ in range(3):
+        preview(costly)
+    s.apply(msg('{"type": "interact", "active": false}'), t)
+    refine = s.start_frame(t + 2 * INPUT_SETTLE_S)
+    assert refine.full and (refine.still.width, refine.still.height) == (960, 540)
 
 
 def test_clock_play_pause_seek_speed():

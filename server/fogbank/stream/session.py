@@ -25,6 +25,13 @@ MAX_IN_FLIGHT = 2
 INPUT_SETTLE_S = 0.25     # after the last input, this long until the full-quality refinement
 VIEW_WAIT_S = 0.3         # a new session waits this long for its client's view size
 PREVIEW_QUALITY = 60      # JPEG quality while the user drags
+# A preview's render budget: a look whose previews take longer is previewed smaller (a
+# costly look blurs while it is dragged instead of dropping the page's frame rate); the
+# full-quality frame after input stops is always the view's size (Session.measured).
+PREVIEW_BUDGET_MS = 60.0
+PREVIEW_SCALES = (1.0, 0.75, 0.5, 0.35, 0.25)   # of the view's side: few sizes, few cached targets
+PREVIEW_MIN_SIDE = 64
+PREVIEW_COST_TTL_S = 2.0   # a scale's measured cost is trusted this long (the look may change)
 
 
 @dataclass
@@ -39,6 +46,7 @@ class FrameJob:
     playing: bool
     show: str = "shaded"   # or a view that teaches (render/teach.py), with its layer
     layer: int = 0
+    scale: float = 1.0     # a preview's share of the view's side
 
 
 class Session:
@@ -60,6 +68,8 @@ class Session:
         self.playing = True
         self.speed = 1.0
         self.stalled = -1         # the version whose frame passed its deadline
+        self.preview_scale = 1.0  # of the view's side, for previews
+        self.preview_costs: dict[float, tuple[float, float]] = {}   # scale -> (ms, when measured)
         self.fog = FogParams.model_validate(P.preset_dict("default"))
         self._base_sim = self.fog.time
         self._base_wall = now
@@ -196,8 +206,11 @@ class Session:
         if preview:   # cheaper while dragging: coarser fog, no MSAA, lower JPEG quality
             scale = max(scale, 2 if v.width * v.height <= 640 * 360 else 4)
         eff = fog.effects.model_copy(update={"fog_scale": scale})
+        width, height = v.width, v.height
+        if preview and self.preview_scale < 1.0:
+            width, height = (max(PREVIEW_MIN_SIDE, 2 * round(side * self.preview_scale / 2)) for side in (v.width, v.height))
         still = StillParams.model_construct(**{**dict(fog), "effects": eff, "time": self.sim_time(now),
-                                               "width": v.width, "height": v.height})
+                                               "width": width, "height": height})
         self.frame += 1
         self.making += 1
         self.last_start = now
@@ -205,7 +218,8 @@ class Session:
         self.last_full = not preview
         return FrameJob(self.frame, self.version, still, msaa=not preview,
                         quality=min(v.quality, PREVIEW_QUALITY) if preview else v.quality,
-                        full=not preview, playing=self.playing, show=v.show, layer=v.layer)
+                        full=not preview, playing=self.playing, show=v.show, layer=v.layer,
+                        scale=self.preview_scale if preview else 1.0)
 
     def pause(self, now: float) -> None:
         """Stop the clock and make no frame until the look changes (its frame was too
@@ -214,6 +228,28 @@ class Session:
             self.apply(PlayMsg(type="play", playing=False), now)
         self.stalled = self.version
         self.dirty = False
+
+    def measured(self, job: FrameJob, render_ms: float, now: float) -> None:
+        """A frame's render time. Previews climb PREVIEW_SCALES by what they cost: a
+        preview over PREVIEW_BUDGET_MS makes the next one a step smaller; one well under
+        it (a fifth to spare) a step larger, unless that size was measured over the
+        budget within PREVIEW_COST_TTL_S. Costs are measured, not modelled: a frame's
+        fixed costs (shadow map, sky, particles) do not shrink with its pixels."""
+        if job.full:
+            return
+        prev = self.preview_costs.get(job.scale)
+        ms = render_ms if prev is None or now - prev[1] > PREVIEW_COST_TTL_S else 0.5 * (prev[0] + render_ms)
+        self.preview_costs[job.scale] = (ms, now)
+        if job.scale != self.preview_scale:
+            return   # a frame of an earlier step: recorded, no step taken
+        i = PREVIEW_SCALES.index(self.preview_scale)
+        if ms > PREVIEW_BUDGET_MS and i + 1 < len(PREVIEW_SCALES):
+            self.preview_scale = PREVIEW_SCALES[i + 1]
+        elif ms < 0.8 * PREVIEW_BUDGET_MS and i > 0:
+            up = PREVIEW_SCALES[i - 1]
+            known = self.preview_costs.get(up)
+            if known is None or now - known[1] > PREVIEW_COST_TTL_S or known[0] <= PREVIEW_BUDGET_MS:
+                self.preview_scale = up
 
     def frame_done(self, job: FrameJob, sent: bool) -> None:
         """A frame was sent (or dropped: failed, stale, or the client left)."""

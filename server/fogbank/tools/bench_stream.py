@@ -46,13 +46,18 @@ async def _frames(ws, seconds: float, on_frame=None, on_text=None) -> list[tuple
 
 
 async def delivered_fps(url: str, query: str, width: int, height: int, seconds: float = 8.0,
-                        orbit: bool = False, fps_cap: int = 120) -> dict:
+                        orbit: bool = False, fps_cap: int = 120, drag: bool = False) -> dict:
     """Frames per second a client receives (after 2 s of warm-up), and the server's
-    render and encode times from the frame headers."""
+    render and encode times from the frame headers. With `drag`, the client says it is
+    interacting first, as the page does while the camera is dragged (previews)."""
     ws = await _session(url, query, width, height, fps_cap)
     try:
         await _frames(ws, 2.0)
+        if drag:
+            await ws.send(json.dumps({"type": "interact", "active": True}))
         yaw = [0.0]
+        if orbit:   # a first move, so that a paused look has a frame to answer
+            await ws.send(json.dumps({"type": "camera", "camera": {"yaw": yaw[0]}}))
 
         async def move(_h):
             if orbit:
@@ -65,6 +70,7 @@ async def delivered_fps(url: str, query: str, width: int, height: int, seconds: 
         return {"fps": 0.0, "frames": len(frames)}
     span = frames[-1][0] - frames[0][0]
     return {"fps": (len(frames) - 1) / span, "frames": len(frames),
+            "width": statistics.median(f[1][6] for f in frames),
             "render_ms": statistics.median(f[1][4] for f in frames),
             "encode_ms": statistics.median(f[1][5] for f in frames),
             "kb": statistics.median(f[2] for f in frames) / 1024}
