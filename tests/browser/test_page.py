@@ -140,6 +140,11 @@ def test_page_reconnects_after_the_server_restarts(browser):
         assert "camera.yaw=45" in page.url   # the same look, from the URL
         page.wait_for_function("window.fogbank.store.get().confirmed.params.density === 1.7")
         assert page.locator("[data-path='density']").input_value() == "1.7"
+        # the whole panel shows the look the new session confirmed
+        assert page.evaluate("window.fogbank.store.get().params") == \
+            page.evaluate("window.fogbank.store.get().confirmed.params")
+        shown, expected = panel_and_state(page)
+        assert shown == expected
         page.context.close()
     finally:
         s.stop()

@@ -4,6 +4,7 @@ bad input gets a 422 naming the field; schema, presets, health."""
 from __future__ import annotations
 
 import io
+import time
 
 import numpy as np
 import pytest
@@ -243,3 +244,21 @@ def test_the_plot_and_profile_endpoints_answer_and_name_bad_fields(client):
     assert r.status_code == 422 and r.json()["detail"][0]["loc"] == ["body", "points"]
     r = client.post("/api/layers/profile", json={"layer": {"kind": "cosine", "c0": -1}})
     assert r.status_code == 422 and r.json()["detail"][0]["loc"][-1] == "c0"
+
+
+def test_a_costly_ray_plot_is_refused_and_an_unused_noise_tile_is_not_baked(client):
+    """A plot follows the cursor: a look whose plot is estimated over 2 s (16 particle
+    layers of long lives and short steps) is refused naming what costs; a look with no
+    layer sampling the noise tile does not bake one (a 128^3 tile of 6 octaves took 12 s
+    and 400 MB in the web process)."""
+    heavy = {"kind": "particles", "count": 64, "life_min": 1000, "life_max": 1000, "step": 0.00501}
+    r = client.post("/api/plot/ray", json={"params": {"layers": [heavy] * 16}, "x": 5, "y": 5,
+                                           "width": 16, "height": 16})
+    assert r.status_code == 422
+    err = r.json()["detail"][0]
+    assert err["type"] == "cost" and err["loc"] == ["body", "params"] and "particle simulation" in err["msg"]
+    t0 = time.monotonic()
+    r = client.post("/api/plot/ray", json={"params": {"layers": [], "noise": {"size": 128, "octaves": 6, "blur": 8,
+                                                                               "seed": 13}},
+                                           "x": 5, "y": 5, "width": 16, "height": 16})
+    assert r.status_code == 200 and time.monotonic() - t0 < 2.0

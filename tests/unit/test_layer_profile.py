@@ -88,3 +88,22 @@ def test_wrong_point_counts_and_kinds_say_what_is_allowed():
     from fogbank.kinds.homogeneous import Homogeneous
     with pytest.raises(ValueError, match="polynomial and cosine"):
         profile(Homogeneous())
+
+
+def test_a_fit_the_model_would_refuse_is_a_problem_not_a_surprise():
+    """Fits out of the model's ranges (c0 over 100, an amplitude over 10, a coefficient
+    over 1e6 from a tiny tile) are named as problems, so the page never sends them."""
+    cos = Cosine(c0=1.0, terms=[{"amp": 0.5, "k": (0.0, 1.0, 0.0)}])
+    (bad,) = profile(cos, [150.0, 150.0, 150.0, 150.0])["problems"]
+    assert bad["rule"] == "range" and bad["msg"].startswith("c0:")
+    (bad,) = profile(cos, [60.0, 30.0, 0.0, 30.0])["problems"]
+    assert bad["rule"] == "range" and "amp" in bad["msg"]
+    poly = Polynomial(coeffs=[0.0] * 8, half_width=0.0010001)
+    got = profile(poly, [float(i) for i in range(1, 9)])
+    assert max(abs(c) for c in got["fitted"]["coeffs"]) > 1e6
+    assert [p["rule"] for p in got["problems"]] == ["range"]
+    # and every fit offered without a problem is one the model takes
+    for pts in ([1.0, 1.5, 1.0, 0.5], [2.0, 1.0, 0.0, 1.0]):
+        out = profile(cos, pts)
+        if not out["problems"]:
+            Cosine.model_validate({**cos.model_dump(), **out["fitted"]})

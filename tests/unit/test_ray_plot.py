@@ -31,7 +31,7 @@ def test_the_ray_its_ground_hit_densities_and_t():
     assert np.allclose(got["direction"], w, atol=1e-12)
     eye = np.array(f.camera.position)
     assert got["hit"] == "ground"
-    assert abs(got["distance"] - (-eye[1] / w[1])) <= 1.0           # marched in 1 m steps
+    assert abs(got["distance"] - (-eye[1] / w[1])) <= 1e-3          # marched, then bisected
     s = np.array(got["s"])
     p = eye + s[:, None] * w
     assert np.allclose(got["layers"][0]["density"], rho)
@@ -43,10 +43,11 @@ def test_the_ray_its_ground_hit_densities_and_t():
 
 def test_the_sky_runs_to_the_sky_distance_and_direct_kinds_give_their_t():
     f = look(camera={"position": (0.0, 5.0, 0.0), "yaw": 0.0, "pitch": 20.0, "fov": 40.0},
+             effects={"sky_distance": 9000.0},
              layers=[{"kind": "distance", "start": 0.0, "distance": 300.0, "exponent": 1.0, "low": 1.0,
                       "high": 1.0, "max": 0.8}])
     got = plot_ray(f, 100.0, 20.0, 200, 100)
-    assert got["hit"] == "sky" and got["distance"] == 400.0
+    assert got["hit"] == "sky" and got["distance"] == 9000.0   # as far as the frame's sky ray
     (layer,) = got["layers"]
     assert "density" not in layer
     s = np.array(got["s"])

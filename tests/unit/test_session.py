@@ -104,12 +104,38 @@ def test_a_costly_look_is_previewed_smaller_and_refined_at_full_size():
     cheap = lambda w: 10.0 + 20.0 * (w / 960) ** 2   # noqa: E731
     t += 3.0   # past the time a measured cost is trusted
     assert [preview(cheap) for _ in range(4)] == [sized(0.5), sized(0.75), sized(1.0), sized(1.0)]
+    # a cost fixed, not in the pixels (80 ms at any size): after one step down that did
+    # not pay, the previews stay at the sharper size
+    t += 3.0
+    fixed = lambda w: 80.0   # noqa: E731
+    sizes = [preview(fixed) for _ in range(6)]
+    assert set(sizes[2:]) <= {sized(1.0), sized(0.75)} and sizes[-1] in (sized(1.0), sized(0.75))
+    # a long thin view keeps its shape, its short side at least PREVIEW_MIN_SIDE
+    thin = Session("b", now=0.0)
+    thin.apply(msg('{"type": "play", "playing": false}'), 0.0)
+    thin.apply(msg('{"type": "view", "width": 640, "height": 100}'), 0.0)
+    thin.apply(msg('{"type": "interact", "active": true}'), 0.0)
+    thin.preview_scale = 0.25
+    job = thin.start_frame(0.1)
+    assert (job.still.width, job.still.height) == (410, 64)     # k = 64/100 on both sides
     # input stops: the refinement is the view's own size, whatever the previews were
     for _ in range(3):
         preview(costly)
     s.apply(msg('{"type": "interact", "active": false}'), t)
     refine = s.start_frame(t + 2 * INPUT_SETTLE_S)
     assert refine.full and (refine.still.width, refine.still.height) == (960, 540)
+
+
+def test_the_optical_depth_of_a_missing_layer_is_said_once_and_the_look_is_shown():
+    s = Session("a", now=0.0)
+    s.apply(msg('{"type": "params", "params": {"layers": []}}'), 0.0)
+    (err,) = s.apply(msg('{"type": "view", "show": "optical_depth", "layer": 3}'), 0.0)
+    assert err["loc"] == ["message", "layer"] and "this look has 0 layer(s)" in err["msg"]
+    assert s.start_frame(1.0).show == "shaded"          # no frame fails on it, again and again
+    s.apply(msg('{"type": "params", "params": {"layers": [{"kind": "height"}, {"kind": "sphere"},'
+                ' {"kind": "box"}, {"kind": "homogeneous"}]}}'), 2.0)
+    job = s.start_frame(3.0)
+    assert (job.show, job.layer) == ("optical_depth", 3)
 
 
 def test_clock_play_pause_seek_speed():

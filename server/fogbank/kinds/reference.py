@@ -64,7 +64,9 @@ def transmittance(fog, O, omega, d, t, *, states=None):
     start = eff.start_distance
     O = O + omega * min(start, 1e300)  # the segment begins at the start distance
     dd = np.maximum(d - start, 0.0)
-    tex = _noise_tex(fog)
+    # the noise tile only when an enabled layer samples it (a bake of a large tile takes
+    # seconds and hundreds of MB)
+    tex = _noise_tex(fog) if any(l.enabled and KINDS[l.kind].uses_noise for l in fog.layers) else None
     tau = np.zeros(len(d))      # the exponential layers' optical depth, density inside
     log_direct = np.zeros(len(d))
     for i, layer in enumerate(fog.layers):

@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 from numpy.polynomial import polynomial as npoly
+from pydantic import ValidationError
 
 from fogbank.kinds import KINDS
 from fogbank.kinds.kind import Env
@@ -91,7 +92,7 @@ def _cosine(layer, points: list[float] | None) -> dict[str, Any]:
     s = np.linspace(0.0, 2 * period, SAMPLES)
     rho = _density(shaped, s[:, None] * direction[None, :])
     problems = []
-    if c[0] < float(np.sum(np.abs(c[1:]))) - 1e-12:
+    if c[0] < float(np.sum(np.abs(c[1:]))):   # exactly the model's rule (no tolerance)
         at = float(s[np.argmin(rho)])
         problems.append({"rule": "negative", "at": at, "value": float(rho.min()),
                          "msg": f"c0 = {c[0]:.4g} is below the sum of |amplitudes| = {np.sum(np.abs(c[1:])):.4g}: "
@@ -105,9 +106,22 @@ def _cosine(layer, points: list[float] | None) -> dict[str, Any]:
 
 def profile(layer, points: list[float] | None = None) -> dict[str, Any]:
     """The editor's view of `layer` (a validated polynomial or cosine layer), reshaped
-    through `points` when given (values at the returned points' positions)."""
+    through `points` when given (values at the returned points' positions). Whatever
+    else the layer's model refuses in the fitted coefficients (a value out of its range:
+    c0 over 100, an amplitude over 10, a coefficient over 1e6 from a fit on a tiny tile)
+    is a problem too ("range"), so that nothing the editor offers is refused when sent."""
     if layer.kind == "polynomial":
-        return _polynomial(layer, points)
-    if layer.kind == "cosine":
-        return _cosine(layer, points)
-    raise ValueError(f"layer.kind = {layer.kind!r}: the editor shapes {' and '.join(KINDS_EDITED)} layers")
+        out = _polynomial(layer, points)
+    elif layer.kind == "cosine":
+        out = _cosine(layer, points)
+    else:
+        raise ValueError(f"layer.kind = {layer.kind!r}: the editor shapes {' and '.join(KINDS_EDITED)} layers")
+    if not out["problems"]:
+        try:
+            type(layer).model_validate({**layer.model_dump(mode="json"), **out["fitted"]})
+        except ValidationError as exc:
+            e = exc.errors(include_url=False)[0]
+            at = ".".join(str(x) for x in e["loc"])
+            out["problems"].append({"rule": "range", "at": None, "value": None,
+                                    "msg": f"{at}: {e['msg']}" if at else e["msg"]})
+    return out

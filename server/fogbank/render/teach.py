@@ -2,12 +2,12 @@
 
 - "transmittance": the fog's T per pixel, black (T = 0) to white (T = 1);
 - "optical_depth": one layer's optical depth tau = -ln T_j (the look with only that
-  layer), on a colour scale from 0 to the view's 99th percentile of tau (a few grazing
-  rays at the horizon would otherwise flatten the rest; above it, the top colour);
+  layer), on a colour scale from 0 to the 99th percentile of its non-zero pixels
+  (scale_top; above it, the top colour);
 - "difference": |T_analytic - T_raymarch| per pixel, the closed forms against a
   RAYMARCH_STEPS-step raymarch of the same look (exponential layers; the others are the
-  same closed form in both), on a colour scale from 0 to its 99th percentile, with its
-  max. Where they differ, it is the raymarch that errs: the closed forms match float64
+  same closed form in both), on the same kind of scale, with its max and the 99th
+  percentile over all pixels. Where they differ, it is the raymarch that errs: the closed forms match float64
   quadrature (docs/accuracy.md), while a fixed step aliases fine waves on long rays.
 
 Each is drawn from the fog target (raw T per fog texel, before the global effects; in
@@ -52,6 +52,14 @@ def _to_view(texels: np.ndarray, width: int, height: int) -> np.ndarray:
     return texels[::-1][rows][:, cols]
 
 
+def scale_top(v: np.ndarray) -> float:
+    """The top of a view's colour scale: the 99th percentile of its non-zero pixels (a
+    few grazing rays at the horizon would flatten the rest under the max; a layer that
+    covers under 1% of the view would vanish under the percentile of all pixels)."""
+    nz = v[v > 0]
+    return float(np.percentile(nz, 99)) if nz.size else 0.0
+
+
 def _legend(stops: np.ndarray, lo: float, hi: float, label: str) -> dict[str, Any]:
     return {"colors": ["#%02x%02x%02x" % tuple(int(c) for c in s) for s in stops],
             "lo": lo, "hi": hi, "label": label}
@@ -83,7 +91,7 @@ def render(r, still, show: str, layer: int = 0, slot: str = "teach") -> tuple[np
         one = still.model_copy(update={"layers": [still.layers[layer].model_copy(update={"enabled": True})]})
         # T = 0 (an opaque particle) has no finite depth: shown at the top of the scale
         tau = -np.log(np.maximum(_to_view(_raw_t(r, one, slot), w, h), 1e-30))
-        top = float(np.percentile(tau, 99))
+        top = scale_top(tau)
         stats = {"show": show, "layer": layer, "kind": still.layers[layer].kind, "max": float(tau.max()),
                  "p99": top, "mean": float(tau.mean()),
                  "legend": _legend(VIRIDIS, 0.0, top, f"optical depth of layer {layer + 1}")}
@@ -92,8 +100,8 @@ def render(r, still, show: str, layer: int = 0, slot: str = "teach") -> tuple[np
         analytic = _to_view(_raw_t(r, still, slot), w, h)
         marched = _to_view(_raw_t(r, still, slot, RAYMARCH_STEPS), w, h)
         d = np.abs(analytic - marched)
-        top = float(np.percentile(d, 99))
-        stats = {"show": show, "max_abs_dT": float(d.max()), "p99_abs_dT": top,
+        top = scale_top(d)
+        stats = {"show": show, "max_abs_dT": float(d.max()), "p99_abs_dT": float(np.percentile(d, 99)),
                  "steps": RAYMARCH_STEPS,
                  "legend": _legend(VIRIDIS, 0.0, top, f"|T analytic - T raymarch, {RAYMARCH_STEPS} steps|")}
         return colour(d / top if top > 0 else d, VIRIDIS), stats

@@ -36,7 +36,7 @@ from fogbank.service.limits import RequestLimits
 from fogbank.model.params import LAYER_CLASSES, FogParams, StillParams
 from fogbank.model.suggest import suggest_layer
 from fogbank.model.layer_profile import KINDS_EDITED, profile
-from fogbank.model.ray_plot import plot_ray
+PLOT_BUDGET_S = 2.0   # a ray plot follows the cursor: a look whose plot costs more is refused
 from fogbank.model.fields import RAY_LIMIT, Direction, Int, Position, Strict
 from fogbank.service.security import SecurityHeaders, origin_allowed
 from fogbank.workers.supervisor import Supervisor, WorkerError
@@ -73,11 +73,6 @@ class RayPlotRequest(Strict):
     width: Int = Field(ge=16, le=4096, description="the view's width (px)")
     height: Int = Field(ge=16, le=4096, description="the view's height (px)")
 
-    @model_validator(mode="after")
-    def _inside(self) -> "RayPlotRequest":
-        if self.x >= self.width or self.y >= self.height:
-            raise ValueError(f"the pixel ({self.x:g}, {self.y:g}) is outside the {self.width}x{self.height} view")
-        return self
 
 
 EditedLayer = Annotated[Union[tuple(LAYER_CLASSES[k] for k in KINDS_EDITED)], Field(discriminator="kind")]
@@ -372,9 +367,25 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     @app.post("/api/plot/ray", response_model=dict[str, Any], responses={413: TOO_LARGE},
               summary="The ray under a pixel, in float64: each layer's density along it and T(s)")
     async def ray_plot(req: RayPlotRequest):
+        for name, v, side in (("x", req.x, req.width), ("y", req.y, req.height)):
+            if v >= side:
+                raise RequestValidationError([errors.error(
+                    ["body", name], f"{name} = {v:g} is outside the {req.width}x{req.height} view "
+                    f"(0 <= {name} < {side})", "value_error")])
         fog = resolve(req.params, FogParams, ("body", "params"))
-        async with suggest_lock:   # float64 numpy on a thread, one at a time
-            return await asyncio.to_thread(plot_ray, fog, req.x, req.y, req.width, req.height)
+        c = cost.plot_seconds(fog, settings.cost_scale)
+        if c.seconds > PLOT_BUDGET_S:
+            metrics.ERRORS.labels("cost").inc()
+            raise RequestValidationError([errors.error(
+                ["body", "params"], f"this look's ray plot is estimated at {c.seconds:.1f} s; a plot "
+                f"follows the cursor, so it may take {PLOT_BUDGET_S:g} s: " + "; ".join(
+                    f"{k} ~{c.parts[k]:.1f} s" for k in c.biggest()) +
+                " (fewer particles or longer simulation steps, a smaller or already baked noise tile)",
+                "cost")])
+        # float64 numpy in a worker process (its time, its deadline), never the web process
+        out = await _job(_slot_for(c.seconds), worker.plot_ray, fog, req.x, req.y, req.width, req.height,
+                         deadline=settings.render_timeout_s)
+        return out["plot"]
 
     @app.post("/api/layers/profile", response_model=dict[str, Any], responses={413: TOO_LARGE},
               summary="A polynomial or cosine layer's density along its axis, the points that shape "

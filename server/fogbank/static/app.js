@@ -188,8 +188,13 @@ stream.addEventListener("error", (e) => {
     return;
   }
   toast(e.detail.msg || "error");
-  store.set({ redrawNext: true });   // the server kept its last valid look: show it again
-  stream.send({ type: "params", params: {} });
+  // a refused change of the look (its fields in `detail`): the server kept its last valid
+  // look, show it again. A frame's failure, a deadline or a rate limit changes no look:
+  // resending would only start the same costly frame again.
+  if (Array.isArray(e.detail.detail)) {
+    store.set({ redrawNext: true });
+    stream.send({ type: "params", params: {} });
+  }
 });
 stream.addEventListener("frame", (e) => {
   store.update((s) => ({ lastFrame: e.detail, frames: s.frames + 1 }));
@@ -458,7 +463,14 @@ function showLayers(s) {
   if ([...sel.options].map((o) => o.text).join() !== names.join()) {
     sel.replaceChildren(...names.map((n, i) => new Option(n, String(i))));
   }
-  // the layer shown must exist: the last one when the list got shorter
+  // the layer shown must exist: the last one when the list got shorter; with no layers
+  // left there is no optical depth to show, and the look is shown
+  if (!layers.length && s.show === "optical_depth") {
+    $("show").value = "shaded";
+    store.set({ show: "shaded", viewStats: null });
+    sendView();
+    return;
+  }
   const layer = Math.min(s.showLayer, Math.max(0, layers.length - 1));
   sel.value = String(layer);
   if (layer !== s.showLayer) { store.set({ showLayer: layer }); sendView(); }

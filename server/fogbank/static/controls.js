@@ -302,7 +302,11 @@ function listControl(schema, path, node, value, onChange, ctx) {
     if (ctx.functionEditor && (item.kind === "polynomial" || item.kind === "cosine")) {
       const shape = el("details", { class: "shape" }, el("summary", {}, "Shape the function (drag its points)"));
       shape.addEventListener("toggle", () => {
-        if (shape.open && !shape.querySelector(".function-editor")) shape.append(ctx.functionEditor(gpath, item));
+        if (shape.open && !shape.querySelector(".function-editor")) {
+          const ed = ctx.functionEditor(gpath, item);
+          ed.dataset.path = gpath.join(".");
+          shape.append(ed);
+        }
       }, { once: false });
       det.append(shape);
     }
@@ -461,6 +465,8 @@ export class Controls {
         if (range.value !== pos) range.value = pos;
       }
     }
+    // the function editors follow their layer too
+    for (const ed of this.form.querySelectorAll(".function-editor")) ed.refresh?.(valueAt(value, ed.dataset.path));
   }
 }
 

@@ -112,7 +112,13 @@ export function functionEditor(layer, apply) {
     drag = null;
     if (!values) { draw(); return; }
     const n = ++asked;
-    const next = await fetchProfile(layer, values);
+    let next;
+    try {
+      next = await fetchProfile(layer, values);
+    } catch (err) {
+      note.textContent = String(err.message || err);
+      return;
+    }
     if (n !== asked) return;
     prof = next;
     draw();
@@ -122,6 +128,15 @@ export function functionEditor(layer, apply) {
     }
   };
 
+  // The look's layer changed from elsewhere (a typed coefficient, the tile's width, an
+  // undo): the editor shows that layer, not the one it was opened with.
+  box.refresh = (next) => {
+    if (drag || JSON.stringify(next) === JSON.stringify(layer)) return;
+    layer = next;
+    const n = ++asked;
+    fetchProfile(layer).then((p) => { if (n === asked) { prof = p; draw(); } })
+      .catch((err) => { note.textContent = String(err.message || err); });
+  };
   fetchProfile(layer).then((p) => { prof = p; draw(); }).catch((err) => { note.textContent = String(err.message || err); });
   return box;
 }

@@ -28,7 +28,7 @@ from typing import Annotated, Any, Literal, Union
 from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError
 
 from fogbank.model.errors import clean, error, from_validation
-from fogbank.model.fields import MAX_LAYERS
+from fogbank.model.fields import MAX_LAYERS, Int
 from fogbank.model.urlstate import MAX_QUERY
 
 PROTOCOL = 1
@@ -84,7 +84,7 @@ class ViewMsg(_Msg):
     quality: int = Field(80, ge=10, le=95)
     # what the frames show: the shaded look, or a view that teaches (render/teach.py)
     show: Literal["shaded", "transmittance", "optical_depth", "difference"] = "shaded"
-    layer: int = Field(0, ge=0, lt=MAX_LAYERS, description="the layer whose optical depth is shown")
+    layer: Int = Field(0, ge=0, lt=MAX_LAYERS, description="the layer whose optical depth is shown")
 
 
 class InteractMsg(_Msg):

@@ -160,6 +160,12 @@ class Session:
             self.view = msg
             self.view_known = True
             self.dirty = True
+            n = len(self.fog.layers)
+            if msg.show == "optical_depth" and msg.layer >= n:
+                # said once; the frames show the look until a layer of that index exists
+                return [{"type": "error", "loc": ["message", "layer"],
+                         "msg": f"layer {msg.layer} does not exist: this look has {n} layer(s)"
+                                + (f", 0 to {n - 1}" if n else "") + "; the frames show the look meanwhile"}]
             return []
         if isinstance(msg, InteractMsg):
             self.interacting = msg.active
@@ -208,7 +214,10 @@ class Session:
         eff = fog.effects.model_copy(update={"fog_scale": scale})
         width, height = v.width, v.height
         if preview and self.preview_scale < 1.0:
-            width, height = (max(PREVIEW_MIN_SIDE, 2 * round(side * self.preview_scale / 2)) for side in (v.width, v.height))
+            # one scale for both sides (the view's shape kept), its short side at least
+            # PREVIEW_MIN_SIDE (or the view's own, if shorter)
+            k = min(1.0, max(self.preview_scale, PREVIEW_MIN_SIDE / min(v.width, v.height)))
+            width, height = (max(2, 2 * round(side * k / 2)) for side in (v.width, v.height))
         still = StillParams.model_construct(**{**dict(fog), "effects": eff, "time": self.sim_time(now),
                                                "width": width, "height": height})
         self.frame += 1
@@ -218,8 +227,16 @@ class Session:
         self.last_full = not preview
         return FrameJob(self.frame, self.version, still, msaa=not preview,
                         quality=min(v.quality, PREVIEW_QUALITY) if preview else v.quality,
-                        full=not preview, playing=self.playing, show=v.show, layer=v.layer,
+                        full=not preview, playing=self.playing, show=self.showing(), layer=v.layer,
                         scale=self.preview_scale if preview else 1.0)
+
+    def showing(self) -> str:
+        """What the frames show: the view's choice, or the look while it asks for the
+        optical depth of a layer the look does not have (no frame fails on it)."""
+        v = self.view
+        if v.show == "optical_depth" and v.layer >= len(self.fog.layers):
+            return "shaded"
+        return v.show
 
     def pause(self, now: float) -> None:
         """Stop the clock and make no frame until the look changes (its frame was too
@@ -234,7 +251,9 @@ class Session:
         preview over PREVIEW_BUDGET_MS makes the next one a step smaller; one well under
         it (a fifth to spare) a step larger, unless that size was measured over the
         budget within PREVIEW_COST_TTL_S. Costs are measured, not modelled: a frame's
-        fixed costs (shadow map, sky, particles) do not shrink with its pixels."""
+        fixed costs (shadow map, sky, particles) do not shrink with its pixels, so a step
+        down that did not pay (the size above cost at most a quarter more) is taken back,
+        and one known not to pay is not taken."""
         if job.full:
             return
         prev = self.preview_costs.get(job.scale)
@@ -243,12 +262,19 @@ class Session:
         if job.scale != self.preview_scale:
             return   # a frame of an earlier step: recorded, no step taken
         i = PREVIEW_SCALES.index(self.preview_scale)
-        if ms > PREVIEW_BUDGET_MS and i + 1 < len(PREVIEW_SCALES):
-            self.preview_scale = PREVIEW_SCALES[i + 1]
+        fresh = lambda k: (c := self.preview_costs.get(k)) is not None and now - c[1] <= PREVIEW_COST_TTL_S  # noqa: E731
+        if i > 0 and fresh(PREVIEW_SCALES[i - 1]) and self.preview_costs[PREVIEW_SCALES[i - 1]][0] <= 1.25 * ms:
+            # the step down did not pay (the cost is fixed, not in the pixels): back up
+            self.preview_scale = PREVIEW_SCALES[i - 1]
+        elif ms > PREVIEW_BUDGET_MS and i + 1 < len(PREVIEW_SCALES):
+            down = PREVIEW_SCALES[i + 1]
+            # no step down that did not pay: a look whose cost is fixed (not in its
+            # pixels) keeps its sharper preview
+            if not (fresh(down) and self.preview_costs[down][0] > 0.8 * ms):
+                self.preview_scale = down
         elif ms < 0.8 * PREVIEW_BUDGET_MS and i > 0:
             up = PREVIEW_SCALES[i - 1]
-            known = self.preview_costs.get(up)
-            if known is None or now - known[1] > PREVIEW_COST_TTL_S or known[0] <= PREVIEW_BUDGET_MS:
+            if not fresh(up) or self.preview_costs[up][0] <= PREVIEW_BUDGET_MS:
                 self.preview_scale = up
 
     def frame_done(self, job: FrameJob, sent: bool) -> None:

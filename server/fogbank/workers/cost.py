@@ -127,6 +127,19 @@ def bake_seconds(n) -> float:
     return BAKE_S_PER_VOXEL_OCTAVE * n.size ** 3 * n.octaves
 
 
+def plot_seconds(fog: FogParams, scale: float = 1.0) -> Cost:
+    """A ray plot (model/ray_plot.py): each particle layer simulated twice (its own T and
+    the whole fog's), a noise tile baked if a layer samples a tile no worker baked, and
+    the float64 layers over ~4000 ground-march steps and 200 samples."""
+    simulated = [l for _, l in enabled(fog) if KINDS[l.kind].simulate]
+    parts = {"particle simulation": 2 * sum(KINDS[l.kind].simulate_seconds(l) for l in simulated),
+             "layers": 0.002 * max(1, len(fog.layers))}
+    n = fog.noise
+    if uses_noise(fog) and (n.size, n.octaves, n.blur, n.seed) != DEFAULT_BAKE:
+        parts["noise bake"] = bake_seconds(n)
+    return Cost(sum(parts.values()) * scale, 0, {k: v * scale for k, v in parts.items()})
+
+
 def transmittance_seconds(fog: FogParams, rays: int, distinct_times: int, scale: float = 1.0,
                           groups: int = 1) -> Cost:
     """Rays cost little; each distinct time simulates every particle layer once; each

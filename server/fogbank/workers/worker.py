@@ -194,6 +194,16 @@ def still(still, fmt: str) -> dict[str, Any]:
     return _run(fn)
 
 
+def plot_ray(fog, x: float, y: float, width: int, height: int) -> dict[str, Any]:
+    """The ray plot (model/ray_plot.py): float64 numpy, here so that it costs a worker's
+    time, bounded by its deadline, and never the web process's."""
+    from fogbank.model.ray_plot import plot_ray as plot
+
+    def fn(r):
+        return {"plot": plot(fog, x, y, width, height)}
+    return _run(fn)
+
+
 def transmittance(fog, origins: np.ndarray, directions: np.ndarray, lengths: np.ndarray,
                   times: np.ndarray) -> dict[str, Any]:
     def fn(r):
