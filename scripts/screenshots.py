@@ -91,6 +91,33 @@ def issue12(browser, url: str) -> None:
     time.sleep(0.5)
     _save(page, out / "views-function-editor-refuses-a-negative-shape")
     ctx.close()
+    # 4: "Add layer" adds a layer that suits the look, opened, and never a white-out
+    ctx = browser.new_context(viewport={"width": 1280, "height": 800}, bypass_csp=True)
+    page = ctx.new_page()
+    page.goto(url + "/?v=1&time=40&play=0")
+    _quiet(page)
+    add = page.locator("fieldset.list .add").filter(has=page.get_by_role("button", name="Add layer"))
+    add.locator("select").select_option("sphere")
+    add.get_by_role("button", name="Add layer").click()
+    page.wait_for_function("window.fogbank.store.get().confirmed.params.layers.length === 5")
+    _quiet(page)
+    page.locator("[data-section=Layers] > fieldset.list > details.item").nth(4).scroll_into_view_if_needed()
+    _save(page, out / "4-added-layer-opens-and-suits-the-look")
+    # 4: a costly look while dragged: a smaller preview, "refining…", not a stalled page
+    layers = ["height", "cosine", "potential", "sphere", "box", "ellipsoid", "polynomial", "homogeneous"]
+    q = f"v=1&play=0&layers={len(layers)}" + "".join(f"&layers.{i}.kind={k}" for i, k in enumerate(layers))
+    page.goto(url + "/?" + q + "&layers.7.density=0.002")
+    _quiet(page)
+    box = page.locator("#view").bounding_box()
+    x, y = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
+    page.mouse.move(x, y)
+    page.mouse.down()
+    for i in range(30):
+        page.mouse.move(x + 4 * i, y + i)
+        time.sleep(0.05)
+    _save(page, out / "4-costly-look-previewed-smaller-while-dragged")
+    page.mouse.up()
+    ctx.close()
     # 5: a link with a bad part keeps the rest, and says what was left out
     ctx = browser.new_context(viewport={"width": 1280, "height": 800}, bypass_csp=True)
     page = ctx.new_page()

@@ -202,6 +202,10 @@ class TargetCache:
         self._gbuffers.clear()
 
     def drop_slot(self, slot: str) -> None:
+        """A session ended: its scene passes go, and both halves are held to their
+        budgets again. The frame just drawn may have held more (a 1920x1080 frame's
+        targets and scene pass, ~300 MB); with its session gone nothing keeps it."""
         self.park()
         for key in [k for k in self._gbuffers.keys() if k[0] == slot]:
             self._gbuffers.pop(key)
+        self.trim()
