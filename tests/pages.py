@@ -12,7 +12,7 @@ import numpy as np
 from PIL import Image
 
 
-def new_page(browser, url, w=1280, h=720, bypass_csp=True, before=None):
+def new_page(browser, url, w=1100, h=640, bypass_csp=True, before=None):
     # Playwright's wait_for_function evaluates strings, which the page's CSP forbids (no
     # 'unsafe-eval'); test_page_runs_under_its_csp checks the page with the CSP enforced
     ctx = browser.new_context(viewport={"width": w, "height": h}, bypass_csp=bypass_csp)

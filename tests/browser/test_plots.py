@@ -25,9 +25,10 @@ def test_the_plot_panel_follows_the_ray_under_the_cursor(server, browser):
     page.check("#probe")
     box = page.locator("#view").bounding_box()
     cw, ch = page.evaluate("[document.getElementById('view').width, document.getElementById('view').height]")
-    # the pointer at 40% across and 80% down the letterboxed frame
+    # the pointer at 70% across and 70% down the letterboxed frame (clear of the plot panel
+    # on the left and the view switch on the right)
     scale = min(box["width"] / cw, box["height"] / ch)
-    fx, fy = 0.4 * cw, 0.8 * ch
+    fx, fy = 0.7 * cw, 0.7 * ch
     page.mouse.move(box["x"] + (box["width"] - cw * scale) / 2 + fx * scale,
                     box["y"] + (box["height"] - ch * scale) / 2 + fy * scale)
     page.wait_for_function("document.querySelector('#plot .info').textContent.startsWith('ground')")

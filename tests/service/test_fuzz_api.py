@@ -32,7 +32,7 @@ def test_schemathesis_all_checks_fixed_seed(tmp_path):
                           'expected-statuses = ["400", "413", "414", "422", "431"]\n')
         r = subprocess.run([str(st), "--config-file", str(config), "run", srv.url + "/openapi.json",
                             "--checks", "all", "--seed", "42",
-                            "--max-examples", "40", "--no-color",
+                            "--max-examples", "25", "--no-color",
                             "--report-dir", str(tmp_path)],
                            capture_output=True, text=True, timeout=600, env=env, cwd=tmp_path)
     finally:

@@ -20,7 +20,7 @@ import numpy as np
 
 from fogbank.kinds import KINDS
 from fogbank.kinds.kind import Env
-from fogbank.kinds.reference import _noise_tex, layer_transmittance, transmittance
+from fogbank.kinds.reference import _noise_tex, _state, layer_transmittance, transmittance
 from fogbank.model.params import FogParams
 from fogbank.model.suggest import ray_lengths
 from fogbank.scene import camera as cam
@@ -65,6 +65,9 @@ def plot_ray(look: FogParams, x: float, y: float, width: int, height: int,
     x_s = eye + omega * s[:, None]
     tex = _noise_tex(look) if any(KINDS[l.kind].uses_noise for l in look.layers) else None
     env = Env(wind=look.wind.vector(), tex=tex)
+    # each particle layer simulated once, for its own T and the whole fog's
+    states = {i: _state(look, i, l, float(look.time), None) for i, l in enumerate(look.layers)
+              if KINDS[l.kind].simulate}
     layers = []
     for i, layer in enumerate(look.layers):
         kind = KINDS[layer.kind]
@@ -72,7 +75,9 @@ def plot_ray(look: FogParams, x: float, y: float, width: int, height: int,
         if kind.density is not None and not (layer.kind == "noise" and layer.mode != "volume"):
             entry["density"] = kind.density(layer, x_s, t, env).tolist()
         else:
-            entry["transmittance"] = layer_transmittance(layer, look, O, omega, s, t, tex=tex).tolist()
+            entry["transmittance"] = layer_transmittance(layer, look, O, omega, s, t, tex=tex,
+                                                         state=states.get(i)).tolist()
         layers.append(entry)
     return {"s": s.tolist(), "distance": d, "hit": "ground" if hit else "sky",
-            "direction": w[0].tolist(), "T": transmittance(look, O, omega, s, t).tolist(), "layers": layers}
+            "direction": w[0].tolist(), "T": transmittance(look, O, omega, s, t, states=states).tolist(),
+            "layers": layers}

@@ -128,11 +128,11 @@ def bake_seconds(n) -> float:
 
 
 def plot_seconds(fog: FogParams, scale: float = 1.0) -> Cost:
-    """A ray plot (model/ray_plot.py): each particle layer simulated twice (its own T and
-    the whole fog's), a noise tile baked if a layer samples a tile no worker baked, and
+    """A ray plot (model/ray_plot.py): each particle layer simulated once, a noise tile
+    baked if a layer samples a tile no worker baked, and
     the float64 layers over ~4000 ground-march steps and 200 samples."""
     simulated = [l for _, l in enabled(fog) if KINDS[l.kind].simulate]
-    parts = {"particle simulation": 2 * sum(KINDS[l.kind].simulate_seconds(l) for l in simulated),
+    parts = {"particle simulation": sum(KINDS[l.kind].simulate_seconds(l) for l in simulated),
              "layers": 0.002 * max(1, len(fog.layers))}
     n = fog.noise
     if uses_noise(fog) and (n.size, n.octaves, n.blur, n.seed) != DEFAULT_BAKE:
