@@ -36,15 +36,21 @@ def _quiet(page) -> None:
     time.sleep(1.0)
 
 
+def _open(browser, link: str, w: int = 1280, h: int = 800):
+    """(context, page) of `link` in a window of w x h, once its full frame is on screen."""
+    ctx = browser.new_context(viewport={"width": w, "height": h}, bypass_csp=True)
+    page = ctx.new_page()
+    page.goto(link)
+    _quiet(page)
+    return ctx, page
+
+
 def issue12(browser, url: str) -> None:
     """One screenshot per finding of issue 12, fixed."""
     out = ROOT / "docs" / "issue12"
     out.mkdir(parents=True, exist_ok=True)
-    ctx = browser.new_context(viewport={"width": 1280, "height": 800}, bypass_csp=True)
-    page = ctx.new_page()
     # 1, 2, 3: the panel in sections, a layer's sentence, formula and source, a field's help
-    page.goto(url + "/?v=1&time=40&play=0")
-    _quiet(page)
+    ctx, page = _open(browser, url + "/?v=1&time=40&play=0")
     page.locator("[data-path='layers.0.density']").locator("xpath=..").locator("label").hover()
     _save(page, out / "2-help-formula-and-field")
     # 3: undo and the resets above the panel after an edit; the camera section's bounds
@@ -92,10 +98,7 @@ def issue12(browser, url: str) -> None:
     _save(page, out / "views-function-editor-refuses-a-negative-shape")
     ctx.close()
     # 4: "Add layer" adds a layer that suits the look, opened, and never a white-out
-    ctx = browser.new_context(viewport={"width": 1280, "height": 800}, bypass_csp=True)
-    page = ctx.new_page()
-    page.goto(url + "/?v=1&time=40&play=0")
-    _quiet(page)
+    ctx, page = _open(browser, url + "/?v=1&time=40&play=0")
     add = page.locator("fieldset.list .add").filter(has=page.get_by_role("button", name="Add layer"))
     add.locator("select").select_option("sphere")
     add.get_by_role("button", name="Add layer").click()
@@ -119,20 +122,14 @@ def issue12(browser, url: str) -> None:
     page.mouse.up()
     ctx.close()
     # 5: a link with a bad part keeps the rest, and says what was left out
-    ctx = browser.new_context(viewport={"width": 1280, "height": 800}, bypass_csp=True)
-    page = ctx.new_page()
-    page.goto(url + "/?v=1&preset=biri-fig7&density=2&wind.speed=banana&play=0")
-    _quiet(page)
+    ctx, page = _open(browser, url + "/?v=1&preset=biri-fig7&density=2&wind.speed=banana&play=0")
     _save(page, out / "5-bad-link-keeps-the-rest")
     # 5: an over-long link's page
     page.goto(url + "/?v=1&density=2&pad=" + "a" * 100_000)
     _save(page, out / "5-over-long-link-page")
     ctx.close()
     # 7: a 16:9 link opened in a tall window keeps its framing
-    ctx = browser.new_context(viewport={"width": 900, "height": 1000}, bypass_csp=True)
-    page = ctx.new_page()
-    page.goto(url + "/?v=1&time=40&play=0&aspect=1.778")
-    _quiet(page)
+    ctx, page = _open(browser, url + "/?v=1&time=40&play=0&aspect=1.778", 900, 1000)
     if page.locator("#panel").is_visible():
         page.locator("#toggle-panel").click()
         time.sleep(1.0)

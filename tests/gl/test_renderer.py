@@ -680,7 +680,7 @@ def test_volume_noise_points_are_jittered_per_pixel_within_the_stated_bound(rend
     is deterministic. The sample count keeps the stated bound for any j
     (kinds/noise.glsl): tested on the float64 reference in tests/unit/test_reference.py."""
     from fogbank.kinds import noise as noise_kind
-    from fogbank.kinds.reference import _env, _noise_tex
+    from fogbank.kinds.reference import _env, noise_tex
     from fogbank.render.probes import fog_only
     still = calibration_still(layers=[{"kind": "noise", "mode": "volume", "density": 0.02,
                                        "scale": 300.0, "samples": 4}],
@@ -694,7 +694,7 @@ def test_volume_noise_points_are_jittered_per_pixel_within_the_stated_bound(rend
     rays = hand_rays(still.camera, gx.ravel(), gy.ravel(), w_, h)
     fog = still.fog()
     layer = fog.layers[0]
-    env = _env(fog, fog.density, _noise_tex(fog))
+    env = _env(fog, fog.density, noise_tex(fog))
     eye = np.broadcast_to(view.eye, rays.shape)
     t = np.zeros(len(d))
     j = ign(gx.ravel() + 7, gy.ravel() + 13)

@@ -23,7 +23,8 @@ def _env(fog, weight=1.0, tex=None, state=None) -> Env:
     return Env(wind=fog.wind.vector(), weight=weight, tex=tex, state=state)
 
 
-def _noise_tex(fog):
+def noise_tex(fog):
+    """The look's baked noise tile (cached by noise_bake)."""
     n = fog.noise
     return noise_bake.bake(n.size, n.octaves, n.blur, n.seed)
 
@@ -33,6 +34,13 @@ def _state(fog, index, layer, time, states):
     if states and index in states:
         return states[index]
     return KINDS[layer.kind].simulate(layer, time, fog)
+
+
+def simulated_states(fog, time: float) -> dict:
+    """Every simulated layer's state at `time`, by layer index: for plots and probes that
+    read one look's particles more than once (transmittance's `states`)."""
+    return {i: KINDS[l.kind].simulate(l, time, fog) for i, l in enumerate(fog.layers)
+            if KINDS[l.kind].simulate}
 
 
 def log_layer(layer, fog, O, omega, d, t, *, tex=None, state=None, weight=1.0):
@@ -50,7 +58,7 @@ def log_layer(layer, fog, O, omega, d, t, *, tex=None, state=None, weight=1.0):
 def layer_transmittance(layer, fog, O, omega, d, t, *, tex=None, state=None):
     """One layer's T along the rays (no global effects)."""
     if tex is None and KINDS[layer.kind].uses_noise:
-        tex = _noise_tex(fog)
+        tex = noise_tex(fog)
     if state is None and KINDS[layer.kind].simulate:
         state = _state(fog, -1, layer, float(np.asarray(t).reshape(-1)[0]), None)
     return np.exp(log_layer(layer, fog, O, omega, d, t, tex=tex, state=state))
@@ -66,7 +74,7 @@ def transmittance(fog, O, omega, d, t, *, states=None):
     dd = np.maximum(d - start, 0.0)
     # the noise tile only when an enabled layer samples it (a bake of a large tile takes
     # seconds and hundreds of MB)
-    tex = _noise_tex(fog) if any(l.enabled and KINDS[l.kind].uses_noise for l in fog.layers) else None
+    tex = noise_tex(fog) if any(l.enabled and KINDS[l.kind].uses_noise for l in fog.layers) else None
     tau = np.zeros(len(d))      # the exponential layers' optical depth, density inside
     log_direct = np.zeros(len(d))
     for i, layer in enumerate(fog.layers):

@@ -20,7 +20,7 @@ import numpy as np
 
 from fogbank.kinds import KINDS
 from fogbank.kinds.kind import Env
-from fogbank.kinds.reference import _noise_tex, _state, layer_transmittance, transmittance
+from fogbank.kinds.reference import layer_transmittance, noise_tex, simulated_states, transmittance
 from fogbank.model.params import FogParams
 from fogbank.model.suggest import ray_lengths
 from fogbank.scene import camera as cam
@@ -63,11 +63,11 @@ def plot_ray(look: FogParams, x: float, y: float, width: int, height: int,
     omega = np.broadcast_to(w[0], (n, 3))
     t = np.full(n, look.time)
     x_s = eye + omega * s[:, None]
-    tex = _noise_tex(look) if any(KINDS[l.kind].uses_noise for l in look.layers) else None
+    # every noise layer, drawn or not, is plotted: the tile if any of them samples it
+    tex = noise_tex(look) if any(KINDS[l.kind].uses_noise for l in look.layers) else None
     env = Env(wind=look.wind.vector(), tex=tex)
     # each particle layer simulated once, for its own T and the whole fog's
-    states = {i: _state(look, i, l, float(look.time), None) for i, l in enumerate(look.layers)
-              if KINDS[l.kind].simulate}
+    states = simulated_states(look, float(look.time))
     layers = []
     for i, layer in enumerate(look.layers):
         kind = KINDS[layer.kind]

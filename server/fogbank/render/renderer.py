@@ -66,8 +66,7 @@ class Renderer:
         frame = self.begin(still, slot, msaa)
         for p in FRAME_PASSES:
             p.run(self, frame)
-        self.caches.trim(keep_targets=[frame.targets.size],
-                         keep_gbuffers=[(slot, *frame.targets.size, frame.gbuffer.sunlight is not None)])
+        self.keep_only(frame)
         return frame.image
 
     def transmittance(self, fog, origins, directions, lengths, times) -> np.ndarray:
@@ -86,6 +85,12 @@ class Renderer:
         fbo.use()
         fbo.clear(0.2, 0.4, 0.6, 1.0)
         return fbo.read(components=4, alignment=1)[:4] == bytes((51, 102, 153, 255))
+
+    def keep_only(self, frame: Frame) -> None:
+        """Hold the caches to budget, keeping the frame just drawn: its size's targets and
+        its slot's scene pass."""
+        self.caches.trim(keep_targets=[frame.targets.size],
+                         keep_gbuffers=[(frame.slot, *frame.targets.size, frame.gbuffer.sunlight is not None)])
 
     def trim(self, keep_targets=(), keep_gbuffers=()) -> None:
         """Hold both GL caches to their byte budgets."""

@@ -71,8 +71,7 @@ def _raw_t(r, still, slot: str, raymarch_steps: int | None = None) -> np.ndarray
     f = fog_frame(r, still, raymarch_steps, filtered=jittered(still) and not raymarch_steps, slot=slot)[1]
     t = fog_texels(f)[..., 0].astype(np.float64)
     # the caches hold this size and this session's scene pass, as after a shaded frame
-    r.caches.trim(keep_targets=[f.targets.size],
-                  keep_gbuffers=[(slot, *f.targets.size, f.gbuffer.sunlight is not None)])
+    r.keep_only(f)
     return t
 
 

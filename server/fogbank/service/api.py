@@ -36,7 +36,6 @@ from fogbank.service.limits import RequestLimits
 from fogbank.model.params import LAYER_CLASSES, FogParams, StillParams
 from fogbank.model.suggest import suggest_layer
 from fogbank.model.layer_profile import KINDS_EDITED, profile
-PLOT_BUDGET_S = 2.0   # a ray plot follows the cursor: a look whose plot costs more is refused
 from fogbank.model.fields import RAY_LIMIT, Direction, Int, Position, Strict
 from fogbank.service.security import SecurityHeaders, origin_allowed
 from fogbank.workers.supervisor import Supervisor, WorkerError
@@ -63,6 +62,9 @@ class SuggestRequest(Strict):
     kind: Literal[tuple(LAYER_CLASSES)] = Field(description="the new layer's kind")   # type: ignore[valid-type]
     params: dict[str, Any] = Field(default_factory=dict,
                                    description="the look it joins: a patch over the default preset")
+
+
+PLOT_BUDGET_S = 2.0   # a ray plot follows the cursor: a look whose plot costs more is refused
 
 
 class RayPlotRequest(Strict):
