@@ -31,7 +31,7 @@ def fog_frame(r, still, raymarch_steps: int | None = None, filtered: bool = Fals
     cached in `slot`."""
     f = r.begin(still, slot=slot, msaa=True)
     f.raymarch_steps = raymarch_steps
-    for p in (ShadowPass(), SkyPass(), ScenePass(), ResolvePass()):
+    for p in (ShadowPass(), ScenePass(), SkyPass(), ResolvePass()):
         p.run(r, f)
     f.fog_plan()
     r.ctx.finish()

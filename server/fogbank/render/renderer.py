@@ -30,7 +30,7 @@ class Renderer:
     def __init__(self, ctx: moderngl.Context, cache_bytes: int = CACHE_BYTES):
         self.ctx = ctx
         self.programs = Programs(ctx)
-        self.sky_prog = self.programs.get(FULLSCREEN, "passes/sky.frag")
+        self.sky_prog = self.programs.get("passes/sky.vert", "passes/sky.frag")
         self.scene_prog = self.programs.get("passes/scene.vert", "passes/scene.frag")
         self.shadow_prog = self.programs.get("passes/shadow.vert", "passes/shadow.frag")
         self.blur_prog = self.programs.get(FULLSCREEN, "passes/blur.frag")

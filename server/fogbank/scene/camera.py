@@ -63,6 +63,22 @@ def view(cam: Camera, width: int, height: int) -> View:
     return View(eye, fwd, right * tan * aspect, up * tan, vp)
 
 
+def frustum_planes(view_proj: np.ndarray) -> np.ndarray:
+    """The six planes (a, b, c, d) of a view-projection's clip volume, inside where
+    a x + b y + c z + d >= 0 (Gribb & Hartmann 2001): left, right, bottom, top, near, far."""
+    m = np.asarray(view_proj, dtype=np.float64)
+    return np.array([m[3] + m[0], m[3] - m[0], m[3] + m[1], m[3] - m[1], m[3] + m[2], m[3] - m[2]])
+
+
+def spheres_in_view(view_proj: np.ndarray, centres: np.ndarray, radii: np.ndarray) -> np.ndarray:
+    """Which spheres may be seen: False only for a sphere wholly outside one plane of the
+    clip volume (so every point of what it bounds is clipped away)."""
+    planes = frustum_planes(view_proj)
+    norms = np.linalg.norm(planes[:, :3], axis=1)
+    dist = (np.asarray(centres) @ planes[:, :3].T + planes[:, 3]) / norms   # m, signed, (K, 6)
+    return np.all(dist >= -np.asarray(radii)[:, None], axis=1)
+
+
 def ortho_sun(direction: np.ndarray, center: np.ndarray, half: float) -> np.ndarray:
     """View-projection of an orthographic camera looking along -direction (toward the
     ground from the sun), covering a cube of half-size `half` around `center`."""

@@ -28,7 +28,7 @@ TERRAIN_CELLS = 288   # vertices per side of the detailed grid
 class Mesh:
     terrain_vertices: np.ndarray   # (N, 10) float32, indexed
     terrain_indices: np.ndarray    # (M,) uint32, chunk after chunk
-    terrain_chunks: np.ndarray     # (K, 5): first index, index count, centre x, y, z
+    terrain_chunks: np.ndarray     # (K, 6): first index, index count, centre x, y, z, radius (m)
     objects: np.ndarray            # (K, 10) float32, plain triangles
     bounds: tuple[np.ndarray, float]  # centre and half-size, for the shadow map
 
@@ -142,7 +142,8 @@ def _terrain_grid(n: int = TERRAIN_CELLS):
             tri = np.stack([a, c, b, b, c, d], 1).ravel()
             first = sum(len(x) for x in idx)
             centre = verts[tri, :3].mean(axis=0)
-            chunks.append((first, len(tri), *centre))
+            radius = np.linalg.norm(verts[tri, :3] - centre, axis=1).max()   # bounding sphere
+            chunks.append((first, len(tri), *centre, radius))
             idx.append(tri)
     return verts, np.concatenate(idx).astype(np.uint32), np.array(chunks, dtype=np.float64)
 

@@ -2,8 +2,8 @@
 frame's inputs are the look, the view and the fog plan (render/frame.py).
 
     shadow     look.sun, meshes              -> shadow_map
-    sky        look.sun, view                -> scene_target
-    scene      meshes, shadow_map, view      -> scene_target
+    scene      meshes, shadow_map, view      -> scene_target (cleared)
+    sky        look.sun, view, scene_target  -> scene_target (where no surface is)
     resolve    scene_target                  -> gbuffer (near and far surface per pixel)
     fog        gbuffer.invdist, fog_plan     -> fog
     fog_filter fog, fog_plan                 -> fog (3x3, jittered looks only)
@@ -28,7 +28,7 @@ from fogbank.render.passes.shadow import ShadowPass
 from fogbank.render.passes.sky import SkyPass
 
 FRAME_PASSES: tuple[Pass, ...] = (
-    ShadowPass(), SkyPass(), ScenePass(), ResolvePass(), FogPass(), FogFilterPass(), ParticlesPass(), CompositePass(),
+    ShadowPass(), ScenePass(), SkyPass(), ResolvePass(), FogPass(), FogFilterPass(), ParticlesPass(), CompositePass(),
     BlurPass(), OutputPass(),
 )
 

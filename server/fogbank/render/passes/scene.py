@@ -1,5 +1,6 @@
-"""The scene pass: terrain (nearest chunks first) and objects, lit by the sun with the
-shadow map, into the scene target (the MSAA target, resolved by the resolve pass, or for
+"""The scene pass: terrain (the chunks in view, nearest first) and objects, lit by the
+sun with the shadow map, into the scene target, cleared here (the sky pass then fills what
+no surface covers): the MSAA target, resolved by the resolve pass, or for
 a preview the slot's G-buffer). Cached per slot while scene, camera, sun and MSAA stay."""
 
 from __future__ import annotations
@@ -11,11 +12,12 @@ from fogbank.render.gl import TEX, set_uniforms
 from fogbank.render.passes.base import Pass
 from fogbank.render.passes.sky import scene_target, sun_color
 from fogbank.render.resources import SHADOW_SIZE
+from fogbank.scene import camera as cam
 
 
 class ScenePass(Pass):
     name = "scene"
-    reads = ("meshes", "shadow_map", "view", "scene_target")
+    reads = ("meshes", "shadow_map", "view")
     writes = ("scene_target",)
 
     def run(self, r, f) -> None:
@@ -24,6 +26,8 @@ class ScenePass(Pass):
         look, view = f.still, f.view
         vaos, _, chunks = r.meshes.get(look.scene)
         target = scene_target(f)
+        target.use()
+        target.clear(0.0, 0.0, 0.0, 1.0, depth=1.0)
         ctx = r.ctx
         ctx.enable(moderngl.DEPTH_TEST)
         ctx.disable(moderngl.CULL_FACE)
@@ -33,11 +37,11 @@ class ScenePass(Pass):
             "uShadowTexel": 1.0 / SHADOW_SIZE})
         r.shadow.tex.use(TEX["uShadow"])
         for k, (scene_vao, _) in enumerate(vaos):
-            if k == 0 and len(chunks):   # terrain: nearest chunks first
-                order = np.argsort(np.linalg.norm(chunks[:, 2:5] - view.eye, axis=1))
-                for first, count in chunks[order, :2].astype(int):
+            if k == 0 and len(chunks):   # terrain: the chunks in view, nearest first
+                seen = chunks[cam.spheres_in_view(view.view_proj, chunks[:, 2:5], chunks[:, 5])]
+                order = np.argsort(np.linalg.norm(seen[:, 2:5] - view.eye, axis=1))
+                for first, count in seen[order, :2].astype(int):
                     scene_vao.render(moderngl.TRIANGLES, vertices=int(count), first=int(first))
             else:
                 scene_vao.render(moderngl.TRIANGLES)
-        ctx.disable(moderngl.DEPTH_TEST)
         f.gbuffer.scene_key = f.scene_key

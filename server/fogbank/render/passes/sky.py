@@ -1,5 +1,8 @@
-"""The sky behind the scene: a fullscreen triangle into the scene target (MSAA or the
-G-buffer), with the sun's disc and glow (common/sky.glsl)."""
+"""The sky behind the scene: a fullscreen triangle on the far plane into the scene
+target (MSAA or the G-buffer), with the sun's disc and glow (common/sky.glsl). Drawn
+after the scene with the depth test, so it shades only the pixels (samples) that no
+surface covers: drawn first, it shaded every pixel of the frame and the terrain then
+painted over most of them (20 of 190 ms at 1280x720 on llvmpipe)."""
 
 from __future__ import annotations
 
@@ -24,19 +27,21 @@ def sun_color(look) -> np.ndarray:
 
 class SkyPass(Pass):
     name = "sky"
-    reads = ("look.sun", "view")
+    reads = ("look.sun", "view", "scene_target")
     writes = ("scene_target",)
 
     def run(self, r, f) -> None:
         if f.scene_cached:
             return
-        target = scene_target(f)
-        target.use()
-        target.clear(0.0, 0.0, 0.0, 1.0, depth=1.0)
-        r.ctx.disable(moderngl.DEPTH_TEST)
+        scene_target(f).use()
+        ctx = r.ctx
+        ctx.enable(moderngl.DEPTH_TEST)
+        ctx.depth_func = "<="   # the far plane's 1.0 against the cleared 1.0
         v, look = f.view, f.still
         set_uniforms(r.sky_prog, {
             "uFwd": v.fwd, "uRight": v.right, "uUp": v.up, "uSunDir": look.sun.direction(),
             "uSunColor": sun_color(look), "uFlatSky": look.scene == "calibration",
             "uFlatSkyColor": np.array(srgb_to_linear(CALIBRATION_SKY))})
         r.programs.draw(r.sky_prog, moderngl.TRIANGLES)
+        ctx.depth_func = "<"
+        ctx.disable(moderngl.DEPTH_TEST)
