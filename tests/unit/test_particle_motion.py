@@ -75,3 +75,53 @@ def test_a_particles_strength_is_continuous_in_time():
                   for t in ts])
     assert float(np.abs(np.diff(s)).max()) <= 0.002 / (2 * p.step) + 1e-9
     assert float(s.max()) > 0.7   # and it does reach a real strength
+
+
+def test_a_particle_continued_from_its_last_step_is_the_one_integrated_from_its_birth():
+    """The trajectory cache (Trajectories): over layers drawn from the whole schema and
+    times that run forward by frames, jump ahead, stand still and go back, every position
+    and strength equals, bit for bit, the integration from each particle's birth
+    (cache=None); and a frame 1/30 s later integrates a step or two, not the lives again."""
+    from fogbank.kinds import particle_motion as pm
+    from fogbank.kinds.particles import sample
+    rng = np.random.default_rng(11)
+    for _ in range(6):
+        layer = sample(rng)
+        layer = layer.model_copy(update={"life_max": int(rng.integers(layer.life_min, 301)),
+                                         "gravity": float(rng.uniform(-9.8, 9.8))})
+        cache = pm.Trajectories()
+        t = float(rng.uniform(0, 500))
+        times = [t + i / 30 for i in range(4)] + [t + 9.0, t + 9.0, t + 2.0, t + 400.0, t + 400.04]
+        for ground in (terrain.height, terrain.flat):
+            for when in times:
+                a = simulate(layer, when, WIND, ground, cache=cache)
+                b = simulate(layer, when, WIND, ground, cache=None)
+                assert np.array_equal(a[0], b[0]) == True   # noqa: E712
+                assert np.array_equal(a[1], b[1]) == True   # noqa: E712
+
+
+def test_a_frame_later_takes_a_step_or_two_not_the_whole_lives():
+    """Counted, not timed: the steps integrated (uniform draws of jitter) for a frame 1/30 s
+    after the last, with the cache, against from birth."""
+    from fogbank.kinds import particle_motion as pm
+    layer = Particles(count=64, life_min=500, life_max=1000, step=0.05, seed=3)
+    calls = {"n": 0}
+    real = pm.uniform
+
+    def counting(seed, *keys):
+        calls["n"] += 1
+        return real(seed, *keys)
+    cache = pm.Trajectories()
+    simulate(layer, 100.0, WIND, terrain.height, cache=cache)
+    pm.uniform = counting
+    try:
+        simulate(layer, 100.0 + 1 / 30, WIND, terrain.height, cache=cache)
+        continued = calls["n"]
+        calls["n"] = 0
+        simulate(layer, 100.0 + 1 / 30, WIND, terrain.height, cache=None)
+        from_birth = calls["n"]
+    finally:
+        pm.uniform = real
+    # per call: 6 draws at birth (life, cone, box) and 3 per step integrated
+    assert continued <= 6 + 3 * 2
+    assert from_birth >= 6 + 3 * 500

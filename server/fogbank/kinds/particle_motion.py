@@ -13,6 +13,8 @@ bounces off it. Positions are interpolated between steps so motion is smooth in 
 
 from __future__ import annotations
 
+import threading
+from collections import OrderedDict
 from typing import Callable
 
 import numpy as np
@@ -53,10 +55,50 @@ def _cone(axis: np.ndarray, spread_rad: float, u1, u2) -> np.ndarray:
             + (sin_t * np.sin(phi))[:, None] * b2)
 
 
+class Trajectories:
+    """Where each particle's integration stopped, by layer, wind and ground, so that the next
+    time continues it instead of integrating every particle from its birth again (a look
+    playing at 30 frames a second is a step or two further each frame; from birth it was up
+    to life_max steps, ~0.1 s per layer of 64 particles of life 1000 on this machine). A
+    particle continued is bit for bit the one integrated from birth: the same operations on
+    the same float64 numbers, step by step. Keeps the last MAX_LAYERS * 2 layers; safe
+    across threads (the frame's plan and the rays API)."""
+
+    SIZE = 32
+
+    def __init__(self):
+        self._cache: OrderedDict = OrderedDict()
+        self._lock = threading.Lock()
+
+    def get(self, key) -> dict | None:
+        with self._lock:
+            if key in self._cache:
+                self._cache.move_to_end(key)
+                return self._cache[key]
+        return None
+
+    def put(self, key, value: dict) -> None:
+        with self._lock:
+            self._cache[key] = value
+            self._cache.move_to_end(key)
+            while len(self._cache) > self.SIZE:
+                self._cache.popitem(last=False)
+
+    def clear(self) -> None:
+        with self._lock:
+            self._cache.clear()
+
+
+TRAJECTORIES = Trajectories()
+
+
 def simulate(layer, t: float, wind: np.ndarray,
-             ground: Callable[[np.ndarray, np.ndarray], np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+             ground: Callable[[np.ndarray, np.ndarray], np.ndarray],
+             cache: Trajectories | None = TRAJECTORIES) -> tuple[np.ndarray, np.ndarray]:
     """Positions (M, 3) and strengths s_j = remaining life / initial life (M,) of the
-    particles alive at time t, faded in over their first FADE_IN_STEPS steps. M <= count."""
+    particles alive at time t, faded in over their first FADE_IN_STEPS steps. M <= count.
+    With `cache`, each particle alive at the layer's last simulated time continues from
+    where it stopped (None: every particle from its birth)."""
     n = layer.count
     period = layer.life_max
     slots = np.arange(n, dtype=np.int64)
@@ -82,8 +124,28 @@ def simulate(layer, t: float, wind: np.ndarray,
     dt = layer.step
     steps = np.floor(age).astype(np.int64)
     prev = p.copy()
-    for k in range(int(steps.max()) + 1):
-        moving = steps >= k  # after this step, positions at step k+1 are needed by age >= k
+    # k0: the first step each particle still has to take (0: from its birth). A particle
+    # of the same slot and cycle as last time, not past the steps wanted now, continues
+    # from its stored step: p, v after k0 steps and prev after k0 - 1.
+    k0 = np.zeros(len(slots), np.int64)
+    key = (layer.model_dump_json(), tuple(float(x) for x in target), ground)
+    last = cache.get(key) if cache is not None else None
+    if last is not None:
+        idx = np.searchsorted(last["slots"], slots)
+        idx = np.minimum(idx, len(last["slots"]) - 1)
+        same = (last["slots"][idx] == slots) & (last["cycle"][idx] == cycle) & (last["k"][idx] - 1 <= steps)
+        k0 = np.where(same, last["k"][idx], 0)
+        p = np.where(same[:, None], last["p"][idx], p)
+        v = np.where(same[:, None], last["v"][idx], v)
+        prev = np.where(same[:, None], last["prev"][idx], prev)
+    # the steps some particle takes: the union of each one's k0..steps (a newborn's first
+    # steps and the continued ones' next, not everything in between)
+    todo = k0 <= steps
+    cover = np.zeros(int(steps.max()) + 2, np.int64)
+    np.add.at(cover, k0[todo], 1)
+    np.add.at(cover, steps[todo] + 1, -1)
+    for k in np.flatnonzero(np.cumsum(cover) > 0).tolist():
+        moving = (steps >= k) & (k0 <= k)  # after this step, positions at step k+1 are needed by age >= k
         jitter = np.stack([uniform(layer.seed, slots, cycle, 100 + 3 * k + i) for i in range(3)],
                           axis=1) - 0.5
         nv = v + (target - v) * min(1.0, layer.drag * dt)
@@ -94,9 +156,12 @@ def simulate(layer, t: float, wind: np.ndarray,
         npos[:, 1] = np.where(hit, g, npos[:, 1])
         nv[:, 1] = np.where(hit, np.abs(nv[:, 1]) * 0.3, nv[:, 1])
         nv[:, [0, 2]] = np.where(hit[:, None], nv[:, [0, 2]] * 0.7, nv[:, [0, 2]])
-        prev = np.where((steps == k)[:, None], p, prev)
+        prev = np.where(((steps == k) & (k0 <= k))[:, None], p, prev)
         p = np.where(moving[:, None], npos, p)
         v = np.where(moving[:, None], nv, v)
+    if cache is not None:
+        cache.put(key, {"slots": slots, "cycle": cycle, "k": np.maximum(k0, steps + 1),
+                        "p": p, "v": v, "prev": prev})
     frac = (age - steps)[:, None]
     pos = prev + (p - prev) * frac
     # Fischer: strength = remaining life / initial life. A particle born at full strength
