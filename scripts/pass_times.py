@@ -11,9 +11,12 @@ import sys
 import time
 
 import numpy as np
+import os
+
+MSAA = os.environ.get("MSAA", "1") == "1"
 
 
-def main(names: list[str], frames: int = 6) -> None:
+def main(names: list[str], frames: int = int(os.environ.get("FRAMES", "6"))) -> None:
     from fogbank.model.params import StillParams
     from fogbank.model.presets import preset_dict
     from fogbank.render.passes import FRAME_PASSES
@@ -25,7 +28,7 @@ def main(names: list[str], frames: int = 6) -> None:
         times: dict[str, list[float]] = {}
         for i in range(frames):
             cam = s.camera.model_copy(update={"yaw": s.camera.yaw + 1e-3 * (i + 1)})
-            f = r.begin(s.model_copy(update={"camera": cam}), "still", True)
+            f = r.begin(s.model_copy(update={"camera": cam}), "still", MSAA)
             for p in FRAME_PASSES:
                 t0 = time.perf_counter()
                 p.run(r, f)

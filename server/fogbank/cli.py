@@ -134,7 +134,7 @@ def cmd_bench_stream(args) -> None:
 
 def cmd_bench(args) -> None:
     from fogbank.tools.bench import run
-    run(args.out, quick=args.quick)
+    run(args.out, quick=args.quick, only_targets=args.targets_only, before=args.before)
 
 
 def cmd_soak(args) -> None:
@@ -175,6 +175,9 @@ def main(argv: list[str] | None = None) -> None:
     p = sub.add_parser("bench", help="the whole benchmark; writes docs/bench.md and .json")
     p.add_argument("--out", default="docs")
     p.add_argument("--quick", action="store_true", help="shorter runs (a smoke test)")
+    p.add_argument("--targets-only", action="store_true",
+                   help="measure issue 13's targets only (and the analytic/raymarch section); writes bench.json")
+    p.add_argument("--before", help="a bench.json of another version: its targets become the 'before' column")
     p.set_defaults(fn=cmd_bench)
     p = sub.add_parser("soak", help="N streaming clients for a while; memory, frames, errors")
     p.add_argument("--clients", type=int, default=8)

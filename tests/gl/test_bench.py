@@ -54,3 +54,33 @@ def test_process_boundary_is_measured_through_real_workers():
            "gawron": {"fog_ms": 1.0, "single_ms": 2.0, "separate_ms": 3.0, "single_over_separate": 0.67},
            "streaming": [], "concurrency": [], "stills_ms": {}, "process_boundary": pb}
     assert "## 7. The process boundary" in markdown(res)
+
+
+def test_the_targets_table_reads_each_figure_and_judges_it_against_its_target():
+    """Issue 13's table: each target's figure from the results, before and now, and 'met'
+    by the target's own direction (fps and ratios at least, latency at most)."""
+    from fogbank.tools.bench import targets_markdown
+
+    def figures(fps720, lat, ratio):
+        return {"drag_1280x720": {"fps": fps720, "width": 640, "render_ms": 40},
+                "still_1280x720": {"fps": 41.0}, "drag_640x360": {"fps": 20.0},
+                "orbit_1280x720_nomsaa_ms": 100.0, "orbit_1280x720_msaa_ms": 200.0,
+                "orbit_640x360_nomsaa_ms": 40.0, "orbit_640x360_msaa_ms": 90.0,
+                "vtk": {"version": "9", "gl": "llvmpipe", "triangles": 5, "ms_1280x720": 300.0,
+                        "ms_640x360": 80.0, "fogbank_ms_1280x720": 300.0 / ratio, "ratio_1280x720": ratio},
+                "where_720p": {"scene": 50.0},
+                "costly": [{"look": "16 x sphere", "p50_ms": 50, "p95_ms": lat, "max_ms": lat, "preview_width": 480,
+                            "render_ms": 30}, {"look": "16 x height", "p50_ms": 20, "p95_ms": 60, "max_ms": 70,
+                                               "preview_width": 960, "render_ms": 10}],
+                "workers": [{"workers": 1, "aggregate_fps": 20.0}, {"workers": 2, "aggregate_fps": 25.0}],
+                "analytic": {"cosine": 12.0, "potential": 9.0}}
+    res = {"targets": figures(30.0, 240.0, 3.5), "before": {"version": "abc", "targets": figures(9.8, 900.0, 1.2)}}
+    md = "\n".join(targets_markdown(res))
+    assert "| 1280x720 orbiting, delivered to a dragging client | 9.8 fps | 30.0 fps | >= 24 fps | yes |" in md
+    assert "| 1280x720, still camera, delivered | 41.0 fps | 41.0 fps | >= 40 fps | yes |" in md
+    assert "| 640x360 orbiting, delivered to a dragging client | 20.0 fps | 20.0 fps | >= 50 fps | no |" in md
+    assert "| VTK's unfogged 720p frame / fogbank's foggy one (no MSAA) | 1.20x | 3.50x | >= 3x | yes |" in md
+    assert "| 16 layers, 960x540: control-to-frame p95, worst look | 900.0 ms | 240.0 ms | <= 250 ms | yes |" in md
+    assert "| analytic / raymarch of equal accuracy, potential | 9.00x | 9.00x | >= 10x | no |" in md
+    assert "| 2 render workers / 1, aggregate fps (2 cores) | 1.25x | 1.25x | - | - |" in md
+    assert "| 16 x sphere | 50 | 240 | 240 | 480 | 30 | 900 |" in md

@@ -122,3 +122,63 @@ def run(url: str, query: str = "v=1") -> list[dict]:
         print(f"{w}x{h} control-to-frame latency  p50 {lat['p50_ms']:.0f} ms  p95 {lat['p95_ms']:.0f} ms  "
               f"p99 {lat['p99_ms']:.0f} ms  (n={lat['n']})")
     return rows
+
+
+async def drag_latency(url: str, look: dict, width: int, height: int, changes: int = 24,
+                       every_s: float = 0.15, settle_s: float = 20.0) -> dict:
+    """A slider dragged over a costly look, as the page does it: the look is set, its
+    first frames awaited (`settle_s` at most: a new fog program compiles on its first
+    draw), then `interact` on and a change of the global density every `every_s` while
+    time runs. The latency of each change is the time to the first frame whose params
+    version shows it (a later change's frame counts for it too: the page shows the
+    newest look). Also the previews' median width and the frames' render ms."""
+    ws = await _session(url, "v=1", width, height, 120)
+    lat: list[float] = []
+    widths: list[int] = []
+    render: list[float] = []
+    try:
+        await ws.send(json.dumps({"type": "params", "params": look, "replace": True}))
+        version = [None]
+
+        async def on_text(t):
+            if t.get("type") == "state":
+                version[0] = t["version"]
+        got = asyncio.Event()
+
+        async def first(h):
+            if version[0] is not None and h[2] >= version[0]:
+                got.set()
+        end = time.monotonic() + settle_s
+        while not got.is_set() and time.monotonic() < end:
+            await _frames(ws, 0.1, on_frame=first, on_text=on_text)
+        await ws.send(json.dumps({"type": "interact", "active": True}))
+        pending: list[tuple[int | None, float]] = []   # (version, sent)
+
+        async def on_state(t):
+            if t.get("type") == "state":
+                for i, (v, s) in enumerate(pending):
+                    if v is None:
+                        pending[i] = (t["version"], s)
+                        break
+
+        async def on_frame(h):
+            widths.append(h[6])
+            render.append(h[4])
+            while pending and pending[0][0] is not None and h[2] >= pending[0][0]:
+                lat.append((time.monotonic() - pending.pop(0)[1]) * 1000)
+        for i in range(changes):
+            pending.append((None, time.monotonic()))
+            await ws.send(json.dumps({"type": "params", "params": {"density": 1.0 + 0.02 * (i % 5)}}))
+            await _frames(ws, every_s, on_frame=on_frame, on_text=on_state)
+        end = time.monotonic() + 10
+        while pending and time.monotonic() < end:
+            await _frames(ws, 0.05, on_frame=on_frame, on_text=on_state)
+        lat += [(time.monotonic() - s) * 1000 for _, s in pending]   # never shown: as long as we waited
+        await ws.send(json.dumps({"type": "interact", "active": False}))
+    finally:
+        await ws.close()
+    lat.sort()
+    pick = lambda q: lat[min(len(lat) - 1, int(q * len(lat)))]  # noqa: E731
+    return {"p50_ms": pick(0.5), "p95_ms": pick(0.95), "max_ms": lat[-1], "n": len(lat),
+            "preview_width": statistics.median(widths) if widths else 0,
+            "render_ms": statistics.median(render) if render else 0.0}

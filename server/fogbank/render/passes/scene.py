@@ -1,7 +1,7 @@
 """The scene pass: terrain (the chunks in view, nearest first) and objects, lit by the
 sun with the shadow map, into the scene target, cleared here (the sky pass then fills what
 no surface covers): the MSAA target, resolved by the resolve pass, or for
-a preview the slot's G-buffer). Cached per slot while scene, camera, sun and MSAA stay."""
+a preview the slot's G-buffer. Cached per slot while scene, camera, sun and MSAA stay."""
 
 from __future__ import annotations
 
