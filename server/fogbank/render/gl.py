@@ -11,7 +11,7 @@ from fogbank.render.glsl import ShaderError
 # texture units, fixed per sampler name across every program
 TEX = {"uColor": 0, "uInvDist": 1, "uFog": 2, "uParticles": 3, "uNoise": 4, "uShadow": 5,
        "uRays": 6, "uImage": 0, "uSunLight": 7, "uFarColor": 8, "uFarInvDist": 9, "uFarSunLight": 10,
-       "uTiles": 11}
+       "uTiles": 11, "uLightmap": 12}
 
 
 def create_context(backend: str = "auto", device: int | None = None) -> moderngl.Context:

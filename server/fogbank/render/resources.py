@@ -3,6 +3,8 @@ texture and the baked noise tiles (caches of their own, apart from the passes)."
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import moderngl
 import numpy as np
 
@@ -14,35 +16,62 @@ SHADOW_SIZE = 2048
 NOISE_TILES = 4   # baked tiles kept per worker
 
 
+@dataclass
+class SceneMesh:
+    """One scene's vertex arrays and tables. The terrain (detailed grid and far land) and
+    the objects are drawn by programs of their own (passes/scene.frag TERRAIN)."""
+    terrain: moderngl.VertexArray | None       # scene program, TERRAIN 1
+    terrain_bake: moderngl.VertexArray | None  # the lightmap's program
+    objects: moderngl.VertexArray              # scene program, TERRAIN 0
+    shadow: list[moderngl.VertexArray]         # the shadow program, every mesh
+    bounds: tuple                              # centre and half-size (the shadow map's cube)
+    chunks: np.ndarray                         # the terrain grid's chunks (scene/meshes.py)
+    far: tuple[int, int]                       # first index and count of the far land
+
+
 class Meshes:
-    """Each scene's vertex arrays (scene and shadow programs) and chunk table, built once."""
+    """Each scene's vertex arrays, built once."""
 
-    def __init__(self, ctx, scene_prog, shadow_prog):
-        self.ctx, self.scene_prog, self.shadow_prog = ctx, scene_prog, shadow_prog
-        self._meshes: dict[str, tuple] = {}
+    def __init__(self, ctx, terrain_prog, objects_prog, shadow_prog, bake_prog):
+        self.ctx = ctx
+        self.progs = terrain_prog, objects_prog, shadow_prog, bake_prog
+        self._meshes: dict[str, SceneMesh] = {}
 
-    def get(self, name: str):
-        """(vaos [(scene vao, shadow vao)], bounds, terrain chunks) of a scene."""
+    def get(self, name: str) -> SceneMesh:
         if name not in self._meshes:
+            terrain_prog, objects_prog, shadow_prog, bake_prog = self.progs
             m = meshes.build(name)
             fmt = ("3f 3f 3f 1f", "aPos", "aNormal", "aColor", "aMaterial")
-            vaos = []
+            terrain = bake = None
+            shadow = []
             if len(m.terrain_indices):
                 vbo = self.ctx.buffer(m.terrain_vertices.tobytes())
                 ibo = self.ctx.buffer(m.terrain_indices.tobytes())
-                vaos.append((self.ctx.vertex_array(self.scene_prog, [(vbo, *fmt)], ibo, 4),
-                             self.ctx.vertex_array(self.shadow_prog, [(vbo, "3f 28x", "aPos")], ibo, 4)))
+                # the terrain program reads no colour or material: those attributes are skipped
+                terrain = self.ctx.vertex_array(terrain_prog, [(vbo, *fmt)], ibo, 4, skip_errors=True)
+                bake = self.ctx.vertex_array(bake_prog, [(vbo, "3f 3f 16x", "aPos", "aNormal")], ibo, 4)
+                shadow.append(self.ctx.vertex_array(shadow_prog, [(vbo, "3f 28x", "aPos")], ibo, 4))
             vbo = self.ctx.buffer(m.objects.tobytes())
-            vaos.append((self.ctx.vertex_array(self.scene_prog, [(vbo, *fmt)]),
-                         self.ctx.vertex_array(self.shadow_prog, [(vbo, "3f 28x", "aPos")])))
-            self._meshes[name] = (vaos, m.bounds, m.terrain_chunks)
+            objects = self.ctx.vertex_array(objects_prog, [(vbo, *fmt)])
+            shadow.append(self.ctx.vertex_array(shadow_prog, [(vbo, "3f 28x", "aPos")]))
+            self._meshes[name] = SceneMesh(terrain, bake, objects, shadow, m.bounds, m.terrain_chunks,
+                                           m.terrain_far)
         return self._meshes[name]
 
 
+LIGHTMAP_SIZE = 2048   # texels per side over the shadow map's square: 0.23 m, as the map's own
+
+
 class ShadowMap:
-    """The sun's depth map (bilinear PCF per tap) and the (scene, sun) it was drawn for."""
+    """The sun's depth map (bilinear PCF per tap) and the (scene, sun) it was drawn for;
+    with it the terrain's lightmap: its sun visibility baked from above over the map's
+    square (passes/lightmap.frag), mipmapped, and that square (x0, z0, 1/side)."""
 
     def __init__(self, ctx):
+        self.lightmap = ctx.texture((LIGHTMAP_SIZE, LIGHTMAP_SIZE), 1, dtype="f1")
+        self.lightmap.repeat_x = self.lightmap.repeat_y = False
+        self.lightmap_fbo = ctx.framebuffer(color_attachments=[self.lightmap])
+        self.lightmap_rect = np.array([0.0, 0.0, 1.0, 1.0])
         self.tex = ctx.depth_texture((SHADOW_SIZE, SHADOW_SIZE))
         self.tex.compare_func = "<="
         self.tex.filter = (moderngl.LINEAR, moderngl.LINEAR)

@@ -27,10 +27,11 @@ TERRAIN_CELLS = 288   # vertices per side of the detailed grid
 @dataclass(frozen=True)
 class Mesh:
     terrain_vertices: np.ndarray   # (N, 10) float32, indexed
-    terrain_indices: np.ndarray    # (M,) uint32, chunk after chunk
+    terrain_indices: np.ndarray    # (M,) uint32, chunk after chunk, then the far land
     terrain_chunks: np.ndarray     # (K, 6): first index, index count, centre x, y, z, radius (m)
     objects: np.ndarray            # (K, 10) float32, plain triangles
     bounds: tuple[np.ndarray, float]  # centre and half-size, for the shadow map
+    terrain_far: tuple[int, int] = (0, 0)   # first index and count of the far land (the skirt)
 
 
 def _rgb(hex_: str) -> np.ndarray:
@@ -296,12 +297,18 @@ def build(name: str) -> Mesh:
     if name == "calibration":
         return _calibration()
     tv, ti, tc = _terrain_grid()
+    # the far land is terrain too (drawn by the terrain's program, baked in its lightmap):
+    # its triangles follow the grid's in the vertex and index buffers
+    skirt = _far_skirt()
+    far = (len(ti), len(skirt))
+    ti = np.concatenate([ti, np.arange(len(tv), len(tv) + len(skirt), dtype=np.uint32)])
+    tv = np.concatenate([tv, skirt])
     E = terrain.EXTENT
     F = SKIRT_OUTER
     water = _quad((-F, terrain.WATER_LEVEL, F), (F, terrain.WATER_LEVEL, F),
                   (F, terrain.WATER_LEVEL, -F), (-F, terrain.WATER_LEVEL, -F), _rgb("#0e2a30"), 2.0)
-    objects = np.concatenate([water, _far_skirt()] + _house() + _bridge() + _trees())
-    return Mesh(tv, ti, tc, objects, (np.array([0.0, 5.0, 0.0]), E * 1.05))
+    objects = np.concatenate([water] + _house() + _bridge() + _trees())
+    return Mesh(tv, ti, tc, objects, (np.array([0.0, 5.0, 0.0]), E * 1.05), far)
 
 
 # The calibration scene: unlit, so a pixel's scene colour equals its albedo exactly.
@@ -320,5 +327,5 @@ def _calibration() -> Mesh:
     ground = _quad((-E, 0.0, E), (E, 0.0, E), (E, 0.0, -E), (-E, 0.0, -E), _rgb(CALIBRATION_GROUND), 3.0)
     boxes = [box(lo, hi, _rgb(c), 3.0) for lo, hi, c in CALIBRATION_BOXES]
     empty_v = np.zeros((0, VERTEX_FLOATS), np.float32)
-    return Mesh(empty_v, np.zeros(0, np.uint32), np.zeros((0, 5)), np.concatenate([ground] + boxes),
+    return Mesh(empty_v, np.zeros(0, np.uint32), np.zeros((0, 6)), np.concatenate([ground] + boxes),
                 (np.array([0.0, 0.0, -60.0]), 150.0))

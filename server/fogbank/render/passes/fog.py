@@ -46,7 +46,7 @@ class FogPass(Pass):
                             "uSkyDistance": e.sky_distance, "uSunDir": f.still.sun.direction(),
                             "uNoiseFootprint": footprint})
         if shafts:
-            _, (_, half), _ = r.meshes.get(f.still.scene)
+            _, half = r.meshes.get(f.still.scene).bounds
             # the shadow map spans the scene's bounds (2 half); beyond, nothing is shadowed
             set_uniforms(prog, {"uSunViewProj": f.sun_view_proj, "uEye": v.eye,
                                 "uShaftLength": min(e.sky_distance, 2.0 * half)})

@@ -17,31 +17,36 @@ from fogbank.scene import camera as cam
 
 class ScenePass(Pass):
     name = "scene"
-    reads = ("meshes", "shadow_map", "view")
+    reads = ("meshes", "shadow_map", "lightmap", "view")
     writes = ("scene_target",)
 
     def run(self, r, f) -> None:
         if f.scene_cached:
             return
         look, view = f.still, f.view
-        vaos, _, chunks = r.meshes.get(look.scene)
+        mesh = r.meshes.get(look.scene)
         target = scene_target(f)
         target.use()
         target.clear(0.0, 0.0, 0.0, 1.0, depth=1.0)
         ctx = r.ctx
         ctx.enable(moderngl.DEPTH_TEST)
         ctx.disable(moderngl.CULL_FACE)
-        set_uniforms(r.scene_prog, {
-            "uViewProj": view.view_proj, "uSunViewProj": f.sun_view_proj, "uEye": view.eye,
-            "uSunDir": look.sun.direction(), "uSunColor": sun_color(look),
-            "uShadowTexel": 1.0 / SHADOW_SIZE})
+        common = {"uViewProj": view.view_proj, "uSunViewProj": f.sun_view_proj, "uEye": view.eye,
+                  "uSunDir": look.sun.direction(), "uSunColor": sun_color(look), "uShadowTexel": 1.0 / SHADOW_SIZE}
         r.shadow.tex.use(TEX["uShadow"])
-        for k, (scene_vao, _) in enumerate(vaos):
-            if k == 0 and len(chunks):   # terrain: the chunks in view, nearest first
-                seen = chunks[cam.spheres_in_view(view.view_proj, chunks[:, 2:5], chunks[:, 5])]
-                order = np.argsort(np.linalg.norm(seen[:, 2:5] - view.eye, axis=1))
-                for first, count in seen[order, :2].astype(int):
-                    scene_vao.render(moderngl.TRIANGLES, vertices=int(count), first=int(first))
-            else:
-                scene_vao.render(moderngl.TRIANGLES)
+        if mesh.terrain is not None:
+            # the terrain first (it hides most of the rest): its chunks in view, nearest first,
+            # then the far land
+            set_uniforms(r.terrain_prog, {**common, "uLightmapRect": r.shadow.lightmap_rect})
+            r.shadow.lightmap.use(TEX["uLightmap"])
+            chunks = mesh.chunks
+            seen = chunks[cam.spheres_in_view(view.view_proj, chunks[:, 2:5], chunks[:, 5])]
+            order = np.argsort(np.linalg.norm(seen[:, 2:5] - view.eye, axis=1))
+            for first, count in seen[order, :2].astype(int):
+                mesh.terrain.render(moderngl.TRIANGLES, vertices=int(count), first=int(first))
+            first, count = mesh.far
+            if count:
+                mesh.terrain.render(moderngl.TRIANGLES, vertices=int(count), first=int(first))
+        set_uniforms(r.scene_prog, common)
+        mesh.objects.render(moderngl.TRIANGLES)
         f.gbuffer.scene_key = f.scene_key

@@ -1,5 +1,6 @@
-"""The sun's shadow map: depth of every mesh seen from the sun (orthographic), redrawn
-only when the scene or the sun changes. A cached scene pass needs no shadow map, but
+"""The sun's shadow map: depth of every mesh seen from the sun (orthographic), and the
+terrain's lightmap baked from it (its sun visibility seen from above, passes/lightmap.frag),
+both redrawn only when the scene or the sun changes. A cached scene pass needs no shadow map, but
 light shafts sample it in the fog pass, so then it is made current all the same (one map
 serves every slot of the worker)."""
 
@@ -7,20 +8,23 @@ from __future__ import annotations
 
 import moderngl
 
-from fogbank.render.gl import set_uniform
+import numpy as np
+
+from fogbank.render.gl import TEX, set_uniform, set_uniforms
 from fogbank.render.passes.base import Pass
+from fogbank.render.resources import SHADOW_SIZE
 from fogbank.scene import camera as cam
 
 
 class ShadowPass(Pass):
     name = "shadow"
     reads = ("look.sun", "meshes")
-    writes = ("shadow_map",)
+    writes = ("shadow_map", "lightmap")
 
     def run(self, r, f) -> None:
         look = f.still
-        vaos, bounds, _ = r.meshes.get(look.scene)
-        center, half = bounds
+        mesh = r.meshes.get(look.scene)
+        center, half = mesh.bounds
         f.sun_view_proj = cam.ortho_sun(look.sun.direction(), center, half)
         if f.scene_cached and look.effects.shafts <= 0:
             return
@@ -32,6 +36,19 @@ class ShadowPass(Pass):
         r.ctx.enable(moderngl.DEPTH_TEST)
         r.ctx.disable(moderngl.CULL_FACE)
         set_uniform(r.shadow_prog, "uSunViewProj", f.sun_view_proj)
-        for _, shadow_vao in vaos:
+        for shadow_vao in mesh.shadow:
             shadow_vao.render(moderngl.TRIANGLES)
-        r.shadow.key = key
+        sm = r.shadow
+        # the lightmap's square: the shadow map's cube's, in x and z
+        sm.lightmap_rect = np.array([center[0] - half, center[2] - half, 0.5 / half, 0.5 / half])
+        if mesh.terrain_bake is not None:
+            r.ctx.disable(moderngl.DEPTH_TEST)   # a height field: one surface over each texel
+            sm.lightmap_fbo.use()
+            sm.lightmap_fbo.clear(1.0, 1.0, 1.0, 1.0)
+            set_uniforms(r.lightmap_prog, {"uSunViewProj": f.sun_view_proj, "uLightmapRect": sm.lightmap_rect,
+                                           "uSunDir": look.sun.direction(), "uShadowTexel": 1.0 / SHADOW_SIZE})
+            sm.tex.use(TEX["uShadow"])
+            mesh.terrain_bake.render(moderngl.TRIANGLES)
+            sm.lightmap.build_mipmaps()
+            sm.lightmap.filter = (moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR)
+        sm.key = key
