@@ -163,7 +163,7 @@ def test_generated_glsl_comes_only_from_the_variant_key():
             for x in v:
                 assert (type(x) is int and 0 <= x <= 8) or x in allowed
         code = layer_code(variant(a)) + density_code(variant(a))
-        assert re.fullmatch(r"[\w\s.,;:()\[\]{}<>=+\-*/#&|!]*", code) is not None
+        assert re.fullmatch(r"[\w\s.,;:()\[\]{}<>=+\-*/%#&|!]*", code) is not None
 
 
 @pytest.mark.parametrize("patch", [
@@ -175,3 +175,20 @@ def test_generated_glsl_comes_only_from_the_variant_key():
 def test_strings_never_pass_into_the_look(patch):
     with pytest.raises(ValidationError):
         FogParams.model_validate(patch)
+
+
+def test_layers_of_one_kind_are_one_loop_over_their_slots_wherever_they_sit():
+    """layer_code writes each repeated kind's code once, in a loop over the slots that
+    loop_tables lists; a kind that appears once stays inline at its own slot."""
+    from fogbank.kinds.packing import layer_code, loop_tables
+    key = (("height", ()), ("sphere", ()), ("height", ()), ("cosine", (2,)), ("sphere", ()),
+           ("cosine", (3,)), ("height", ()))
+    code = layer_code(key)
+    assert code.count("heightOpticalDepth(") == 1
+    assert code.count("sphereOpticalDepth(") == 1
+    assert code.count("cosineTermOpticalDepth(") == 2 + 3   # two variants, each inline once
+    assert code.count("for (int i = ") == 2
+    slots, counts = loop_tables(key)
+    assert list(slots[:5]) == [0, 2, 6, 1, 4]    # the heights' slots, then the spheres'
+    assert list(counts[:3]) == [3, 2, 0]
+    assert "uLayer[60 + 0]" not in code and "uLayer[36]" in code   # cosine (3) inline at slot 5 (36 = 3 * 12)

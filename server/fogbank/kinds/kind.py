@@ -39,18 +39,21 @@ class Slot:
     vec: int
     comp: int
 
-    def ref(self, base: int, j: int | None = None) -> str:
+    def ref(self, base: int | str, j: int | None = None) -> str:
         """The GLSL expression reading this slot (element j of an array) of the layer whose
-        first uLayer index is `base`."""
+        first uLayer index is `base`: a number, or a GLSL int expression (a loop over
+        layers of one kind, kinds/packing.py layer_code)."""
+        def at(k: int) -> str:
+            return f"uLayer[{base + k}]" if isinstance(base, int) else f"uLayer[{base} + {k}]"
         if self.count > 1:
             if j is None:
                 raise SlotError(f"slot {self.name!r} is an array: give an index")
             if self.size == 4:
-                return f"uLayer[{base + self.vec + j}]"
-            return f"uLayer[{base + self.vec + j // 4}].{SWIZZLE[j % 4]}"
+                return at(self.vec + j)
+            return f"{at(self.vec + j // 4)}.{SWIZZLE[j % 4]}"
         if self.size == 4:
-            return f"uLayer[{base + self.vec}]"
-        return f"uLayer[{base + self.vec}].{SWIZZLE[self.comp:self.comp + self.size]}"
+            return at(self.vec)
+        return f"{at(self.vec)}.{SWIZZLE[self.comp:self.comp + self.size]}"
 
 
 class Layout:
@@ -131,7 +134,7 @@ class Refs:
         s = self._layout.slots[name]
         if s.count == 1 or s.size != 1 or not 0 <= k < -(-s.count // 4):
             raise SlotError(f"kind {self._layout.kind!r}: slot {name!r} has no vec4 {k}")
-        return f"uLayer[{self.base + s.vec + k}]"
+        return s.ref(self.base, 4 * k).split(".")[0]
 
     def format(self, template: str) -> str:
         return template.format(**{n: s.ref(self.base) for n, s in self._layout.slots.items()

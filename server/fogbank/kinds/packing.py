@@ -42,17 +42,65 @@ def kinds_code() -> str:
     return "".join(f'#include "{k.glsl_file}"\n' for k in KINDS.values())
 
 
+def groups(key: tuple) -> list[tuple[tuple, list[int]]]:
+    """The layers' slots grouped by kind and variant, in order of first appearance."""
+    out: dict[tuple, list[int]] = {}
+    for n, kv in enumerate(key):
+        out.setdefault(kv, []).append(n)
+    return list(out.items())
+
+
+def loop_tables(key: tuple, inline_particles: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """uLayerSlots and uGroupCounts (MAX_LAYERS floats each) for layer_code's loops: the
+    slots of each looped group one after the other, and each looped group's size."""
+    slots = np.zeros(MAX_LAYERS, np.float32)
+    counts = np.zeros(MAX_LAYERS, np.float32)
+    pos = 0
+    for g, (_, members) in enumerate(_looped(key, inline_particles)):
+        slots[pos:pos + len(members)] = members
+        counts[g] = len(members)
+        pos += len(members)
+    return slots, counts
+
+
+def _looped(key: tuple, inline_particles: bool) -> list[tuple[tuple, list[int]]]:
+    return [(kv, m) for kv, m in groups(key)
+            if len(m) > 1 and (inline_particles or not KINDS[kv[0]].quads)]
+
+
 def layer_code(key: tuple, inline_particles: bool = True) -> str:
     """fog/layers.gen.glsl for a variant key. With inline_particles False, kinds drawn by
-    their own pass (particles: the quads pass) are left out."""
+    their own pass (particles: the quads pass) are left out.
+
+    Layers of one kind and variant, wherever they sit among the others, are one loop over
+    their slots, its body the kind's code once: llvmpipe's compile time grows faster than
+    the program (16 cosine layers of 8 terms inlined took over 10 s to compile, the
+    stream's frame deadline; 16 volume-noise layers over 30 s), and a loop keeps the
+    program the size of its distinct kinds. The slots and the trip counts are read from
+    uniforms (uLayerSlots, uGroupCounts; loop_tables), not written in, so that the
+    compiler does not unroll the loops back into the inlined program. Every layer adds
+    to the same sums (tau, tauDirect), so their order does not matter beyond rounding."""
     lines = []
-    for n, (name, v) in enumerate(key):
+    looped = {kv for kv, _ in _looped(key, inline_particles)}
+    pos = g = 0
+    for kv, members in groups(key):
+        name, v = kv
         kind = KINDS[name]
+        label = f"{name} {' '.join(map(str, v))}".rstrip()
+        where = ", ".join(map(str, members))
         if kind.quads and not inline_particles:
-            lines.append(f"// layer {n}: {name}, drawn by its own pass")
-            continue
-        lines.append(f"// layer {n}: {name} {' '.join(map(str, v))}".rstrip())
-        lines.append(kind.code(kind.layout.refs(n * LAYER_VEC4), v))
+            lines.append(f"// layer(s) {where}: {name}, drawn by their own pass")
+        elif kv not in looped:
+            lines.append(f"// layer {where}: {label}")
+            lines.append(kind.code(kind.layout.refs(members[0] * LAYER_VEC4), v))
+        else:
+            lines.append(f"// layers {where}: {label}")
+            lines.append(f"for (int i = {pos}; i < {pos} + int(uGroupCounts[{g // 4}].{'xyzw'[g % 4]}); ++i) {{")
+            lines.append(f"int layerBase = {LAYER_VEC4} * int(uLayerSlots[i / 4][i % 4]);")
+            lines.append(kind.code(kind.layout.refs("layerBase"), v))
+            lines.append("}")
+            pos += len(members)
+            g += 1
     return "\n".join(lines) + "\n"
 
 

@@ -37,6 +37,7 @@ class Programs:
         gen = generated(layers, inline_particles) if layers is not None else None
         all_defines = {**DEFINES, **defines}
         prog = program(self.ctx, vert, frag, all_defines, gen)
+        prog.extra["inline_particles"] = inline_particles   # which layers its loops cover (bind_fog)
         for name, unit in TEX.items():
             if name in prog.extra["declared"]:
                 set_uniform(prog, name, unit)

@@ -13,7 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from fogbank.kinds import KINDS
-from fogbank.kinds.packing import enabled, uses_noise, variant
+from fogbank.kinds.packing import enabled, groups, uses_noise, variant
 from fogbank.model.params import FogParams, StillParams
 from fogbank.render.passes.fog_filter import jittered
 from fogbank.render.targets import FOG_BPP, GBUFFER_BPP, LINEAR_BPP, MSAA_BPP, MSAA_SAMPLES, OUT_BPP, SUNLIGHT_BPP
@@ -31,13 +31,15 @@ ENCODE_S_PER_MPX = {"jpg": 0.01, "png": 0.04, "webp": 0.08}
 # the fog pass's cost per layer comes from each kind (kinds/<name>.py: seconds_per_mpx,
 # extra_seconds), per megapixel of fog target
 # llvmpipe compiles a fog program to machine code at its first draw, and that time grows
-# faster than the program: ~0.3 s for 11 height layers, 1.8 s for 16 cosine terms, 5.8 s
-# for 32, and for volume noise it doubles with each layer past about 10 (1.9 s for 12,
-# 7.8 s for 14, over 30 s for 16). Fitted by hand to those measurements (16x16 frames,
-# first draw minus second); charged only when the worker has not drawn that program yet.
+# faster than the program. Layers of one kind and variant are one loop in the program
+# (kinds/packing.py layer_code), so the program grows with the distinct kinds, not the
+# layers: 16 cosine layers of 8 terms took 43 s to compile inlined, 0.7 s as a loop.
+# Fitted by hand (16x16 frames, first draw minus second): ~0.3 s for a few kinds, 1.8 s
+# for 16 cosine terms inlined in one layer; charged only when the worker has not drawn
+# that program yet.
 JIT_S_PER_UNIT = 0.03
 JIT_EXPONENT = 1.3
-JIT_NOISE_VOLUME_S = 0.95        # times 2 ** (volume noise layers - 11)
+JIT_LOOP_UNITS = 1.0             # a loop's own code (its slot table reads)
 
 
 @dataclass
@@ -63,13 +65,12 @@ def program_key(still: StillParams) -> tuple:
 
 
 def jit_seconds(variant: tuple) -> float:
-    """Estimated first-draw compile time of the fog program for a layers.variant() key."""
-    units = sum(KINDS[name].jit_units(v) for name, v in variant)
-    volume = sum(1 for name, v in variant if (name, v) == ("noise", ("volume",)))
-    s = JIT_S_PER_UNIT * units ** JIT_EXPONENT
-    if volume > 8:
-        s += JIT_NOISE_VOLUME_S * 2.0 ** (volume - 11)
-    return s
+    """Estimated first-draw compile time of the fog program for a layers.variant() key:
+    each distinct kind and variant's code once (packing.groups), a loop's own code for each
+    that repeats."""
+    units = sum(KINDS[name].jit_units(v) + (JIT_LOOP_UNITS if len(members) > 1 else 0.0)
+                for (name, v), members in groups(variant))
+    return JIT_S_PER_UNIT * units ** JIT_EXPONENT
 
 
 def estimate(still: StillParams, msaa: bool = True, fmt: str = "jpg", scale: float = 1.0,

@@ -9,6 +9,7 @@ import math
 
 import moderngl
 
+from fogbank.kinds.packing import loop_tables
 from fogbank.render.gl import TEX, set_uniforms
 from fogbank.render.passes.base import Pass
 
@@ -19,6 +20,11 @@ def bind_fog(r, prog, plan) -> None:
     if "uLayer" in prog:   # constant indexing lets the compiler trim the array
         u = prog["uLayer"]
         u.write(plan.packed.data[:u.array_length].tobytes())
+    if "uGroupCounts" in prog:   # the loops over layers of one kind (packing.layer_code)
+        slots, counts = loop_tables(plan.key, prog.extra.get("inline_particles", True))
+        for name, values in (("uLayerSlots", slots), ("uGroupCounts", counts)):
+            u = prog[name]
+            u.write(values[:4 * u.array_length].tobytes())
     if plan.has_particles:
         r.particles.write(plan.packed.particles.tobytes())
     r.particles.use(TEX["uParticles"])

@@ -15,6 +15,11 @@ float gSampleJitter = 0.5;
 #include "fog/finish.glsl"
 
 uniform vec4 uLayer[MAX_LAYERS * LAYER_VEC4];        // per-layer parameters (kinds/packing.py)
+// the loops over layers of one kind (kinds/packing.py layer_code): the slots of each looped
+// group one after the other, and each group's size (entry n is component n % 4 of vec4
+// n / 4: four vec4s of the uniform budget each, not sixteen)
+uniform vec4 uLayerSlots[MAX_LAYERS / 4];
+uniform vec4 uGroupCounts[MAX_LAYERS / 4];
 uniform float uDensity;                               // global density (0: no fog), for T_j^density
 uniform float uStartDistance;                         // m
 uniform float uCutoffDistance;                        // m, 0 = off
