@@ -39,3 +39,41 @@ def test_the_far_skirt_and_the_terrain_tile_the_plane_exactly():
     assert float(sa.min()) > 0.0
     assert float(ga.sum()) == pytest.approx((2 * terrain.EXTENT) ** 2, rel=1e-6)
     assert float(sa.sum() + ga.sum()) == pytest.approx((2 * meshes.SKIRT_OUTER) ** 2, rel=1e-6)
+
+
+def _signed_areas(verts: np.ndarray, tri: np.ndarray) -> np.ndarray:
+    p = verts[tri.reshape(-1, 3), :][:, :, [0, 2]].astype(np.float64)
+    a, b, c = p[:, 0], p[:, 1], p[:, 2]
+    return 0.5 * ((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (c[:, 0] - a[:, 0]) * (b[:, 1] - a[:, 1]))
+
+
+def _border_edges(tri: np.ndarray) -> set[tuple[int, int]]:
+    """The edges used by one triangle only: a chunk's outline."""
+    t = tri.reshape(-1, 3)
+    edges = np.sort(np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]]), axis=1)
+    uniq, counts = np.unique(edges, axis=0, return_counts=True)
+    return {tuple(e) for e in uniq[counts == 1].tolist()}
+
+
+def test_every_level_of_detail_tiles_each_chunk_and_keeps_its_full_border():
+    """At strides 2 and 4 (meshes.LOD_STRIDES) each chunk's triangles cover its square once
+    (areas sum to it, none degenerate, all wound as the grid's), and its outline is the
+    grid's own, every grid vertex on it: chunks drawn at different levels meet without a
+    crack, and the far land (fanned onto the grid's edge) still meets them."""
+    m = meshes.build("countryside")
+    n = meshes.TERRAIN_CELLS
+    verts = m.terrain_vertices
+    cell = 2 * terrain.EXTENT / (n - 1)
+    fine_sign = np.sign(_signed_areas(verts, m.terrain_indices[:6]))[0]
+    for first, count, *_, f2, c2, f4, c4 in m.terrain_chunks.astype(int):
+        fine = m.terrain_indices[first:first + count]
+        outline = _border_edges(fine)
+        square = np.abs(_signed_areas(verts, fine)).sum()
+        for f, c in ((f2, c2), (f4, c4)):
+            coarse = m.terrain_indices[f:f + c]
+            areas = _signed_areas(verts, coarse)
+            assert bool(np.all(np.sign(areas) == fine_sign)) == True   # noqa: E712
+            assert float(np.abs(areas).min()) > 0.25 * cell * cell
+            assert float(np.abs(areas).sum()) == pytest.approx(float(square), rel=1e-6)
+            assert _border_edges(coarse) == outline
+            assert c < count / 2.5

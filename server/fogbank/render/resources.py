@@ -23,10 +23,11 @@ class SceneMesh:
     terrain: moderngl.VertexArray | None       # scene program, TERRAIN 1
     terrain_bake: moderngl.VertexArray | None  # the lightmap's program
     objects: moderngl.VertexArray              # scene program, TERRAIN 0
-    shadow: list[moderngl.VertexArray]         # the shadow program, every mesh
+    shadow: list[tuple[moderngl.VertexArray, int]]   # the shadow program, every mesh: (vao, vertices; -1 all)
     bounds: tuple                              # centre and half-size (the shadow map's cube)
     chunks: np.ndarray                         # the terrain grid's chunks (scene/meshes.py)
     far: tuple[int, int]                       # first index and count of the far land
+    full_detail: int = 0                       # terrain indices at full detail (shadow, lightmap)
 
 
 class Meshes:
@@ -50,12 +51,13 @@ class Meshes:
                 # the terrain program reads no colour or material: those attributes are skipped
                 terrain = self.ctx.vertex_array(terrain_prog, [(vbo, *fmt)], ibo, 4, skip_errors=True)
                 bake = self.ctx.vertex_array(bake_prog, [(vbo, "3f 3f 16x", "aPos", "aNormal")], ibo, 4)
-                shadow.append(self.ctx.vertex_array(shadow_prog, [(vbo, "3f 28x", "aPos")], ibo, 4))
+                shadow.append((self.ctx.vertex_array(shadow_prog, [(vbo, "3f 28x", "aPos")], ibo, 4),
+                               m.full_detail))
             vbo = self.ctx.buffer(m.objects.tobytes())
             objects = self.ctx.vertex_array(objects_prog, [(vbo, *fmt)])
-            shadow.append(self.ctx.vertex_array(shadow_prog, [(vbo, "3f 28x", "aPos")]))
+            shadow.append((self.ctx.vertex_array(shadow_prog, [(vbo, "3f 28x", "aPos")]), -1))
             self._meshes[name] = SceneMesh(terrain, bake, objects, shadow, m.bounds, m.terrain_chunks,
-                                           m.terrain_far)
+                                           m.terrain_far, m.full_detail)
         return self._meshes[name]
 
 

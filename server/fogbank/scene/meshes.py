@@ -22,16 +22,24 @@ from fogbank.model.fields import srgb_to_linear
 VERTEX_FLOATS = 10
 CHUNKS = 8   # terrain chunks per side
 TERRAIN_CELLS = 288   # vertices per side of the detailed grid
+LOD_STRIDES = (1, 2, 4)   # a chunk's levels of detail: grid cells per coarse cell side
 
 
 @dataclass(frozen=True)
 class Mesh:
     terrain_vertices: np.ndarray   # (N, 10) float32, indexed
     terrain_indices: np.ndarray    # (M,) uint32, chunk after chunk, then the far land
-    terrain_chunks: np.ndarray     # (K, 6): first index, index count, centre x, y, z, radius (m)
+    terrain_chunks: np.ndarray     # (K, 10): first index, count, centre x, y, z, radius (m), and
+                                   # first index and count at strides 2 and 4 (LOD_STRIDES)
     objects: np.ndarray            # (K, 10) float32, plain triangles
     bounds: tuple[np.ndarray, float]  # centre and half-size, for the shadow map
     terrain_far: tuple[int, int] = (0, 0)   # first index and count of the far land (the skirt)
+
+    @property
+    def full_detail(self) -> int:
+        """How many of terrain_indices are the terrain at full detail (the grid's chunks, then
+        the far land); the coarser levels of the chunks follow."""
+        return self.terrain_far[0] + self.terrain_far[1]
 
 
 def _rgb(hex_: str) -> np.ndarray:
@@ -122,6 +130,8 @@ def blob(center, radius, color, squash=0.85) -> np.ndarray:
 
 
 def _terrain_grid(n: int = TERRAIN_CELLS):
+    """The detailed terrain: vertices (n * n, 10), the indices of its chunks' cells, chunk
+    after chunk, and the chunk table (K, 6): first index, count, bounding sphere."""
     xs = np.linspace(-terrain.EXTENT, terrain.EXTENT, n)
     X, Z = np.meshgrid(xs, xs, indexing="xy")
     Y = terrain.height(X, Z)
@@ -133,22 +143,78 @@ def _terrain_grid(n: int = TERRAIN_CELLS):
     # cells in square chunks, so that the renderer can draw the nearest chunks first
     # (early depth rejection then skips most hidden terrain fragments)
     idx, chunks = [], []
-    step = (n - 1) // CHUNKS + 1
-    for j0 in range(0, n - 1, step):
-        for i0 in range(0, n - 1, step):
-            I, J = np.meshgrid(np.arange(i0, min(i0 + step, n - 1)), np.arange(j0, min(j0 + step, n - 1)),
-                               indexing="xy")
-            a = (J * n + I).ravel()
-            b, c, d = a + 1, a + n, a + n + 1
-            tri = np.stack([a, c, b, b, c, d], 1).ravel()
-            first = sum(len(x) for x in idx)
-            centre = verts[tri, :3].mean(axis=0)
-            radius = np.linalg.norm(verts[tri, :3] - centre, axis=1).max()   # bounding sphere
-            chunks.append((first, len(tri), *centre, radius))
-            idx.append(tri)
+    for i0, i1, j0, j1 in _chunk_ranges(n):
+        tri = _chunk_indices(n, i0, i1, j0, j1, 1)
+        first = sum(len(x) for x in idx)
+        centre = verts[tri, :3].mean(axis=0)
+        radius = np.linalg.norm(verts[tri, :3] - centre, axis=1).max()   # bounding sphere
+        chunks.append((first, len(tri), *centre, radius))
+        idx.append(tri)
     return verts, np.concatenate(idx).astype(np.uint32), np.array(chunks, dtype=np.float64)
 
 
+def _chunk_ranges(n: int) -> list[tuple[int, int, int, int]]:
+    """Each chunk's first and last vertex column and row (i0, i1, j0, j1), inclusive."""
+    step = (n - 1) // CHUNKS + 1
+    return [(i0, min(i0 + step, n - 1), j0, min(j0 + step, n - 1))
+            for j0 in range(0, n - 1, step) for i0 in range(0, n - 1, step)]
+
+
+def _lines(lo: int, hi: int, stride: int) -> list[int]:
+    """Grid lines lo, lo + stride, ..., hi; no interval shorter than 2 (a short last one
+    joins the one before), so that every coarse cell has a vertex strictly inside."""
+    out = list(range(lo, hi, stride)) + [hi]
+    if len(out) > 2 and out[-1] - out[-2] < 2:
+        out.pop(-2)
+    return out
+
+
+def _chunk_indices(n: int, i0: int, i1: int, j0: int, j1: int, stride: int) -> np.ndarray:
+    """Triangles of a chunk's cells at a level of detail. Stride 1: every grid cell, two
+    triangles. Stride s: cells s grid cells wide; one inside the chunk is two triangles; one
+    on the chunk's border is a fan from a grid vertex inside it over every grid vertex of
+    its border side(s), so that every chunk's border is the full grid at any level: chunks
+    of different levels meet without a crack. Winding as the grid's (a, c, b)."""
+    def v(i, j):
+        return j * n + i
+    if stride == 1:
+        I, J = np.meshgrid(np.arange(i0, i1), np.arange(j0, j1), indexing="xy")
+        a = (J * n + I).ravel()
+        b, c, d = a + 1, a + n, a + n + 1
+        return np.stack([a, c, b, b, c, d], 1).ravel()
+    xs, zs = _lines(i0, i1, stride), _lines(j0, j1, stride)
+    tris: list[int] = []
+    for ya, yb in zip(zs[:-1], zs[1:]):
+        for xa, xb in zip(xs[:-1], xs[1:]):
+            if xa > i0 and xb < i1 and ya > j0 and yb < j1:
+                a, b, c, d = v(xa, ya), v(xb, ya), v(xa, yb), v(xb, yb)
+                tris += [a, c, b, b, c, d]
+                continue
+            # the border, counterclockwise in (i, j): every grid vertex on a side that lies on
+            # the chunk's border, only the corners on the others
+            ring = [(i, ya) for i in (range(xa, xb) if ya == j0 else [xa])]
+            ring += [(xb, j) for j in (range(ya, yb) if xb == i1 else [ya])]
+            ring += [(i, yb) for i in (range(xb, xa, -1) if yb == j1 else [xb])]
+            ring += [(xa, j) for j in (range(yb, ya, -1) if xa == i0 else [yb])]
+            centre = v((xa + xb) // 2, (ya + yb) // 2)
+            for k in range(len(ring)):   # clockwise, as the grid's triangles
+                p, q = ring[k], ring[(k + 1) % len(ring)]
+                tris += [centre, v(*q), v(*p)]
+    return np.array(tris, dtype=np.int64)
+
+
+def _terrain_lods(n: int, first: int) -> np.ndarray:
+    """Indices of every chunk at strides 2 and 4, and the table (K, 4) of their first index
+    (from `first` on) and count."""
+    idx, table = [], []
+    for i0, i1, j0, j1 in _chunk_ranges(n):
+        row = []
+        for stride in LOD_STRIDES[1:]:
+            tri = _chunk_indices(n, i0, i1, j0, j1, stride)
+            row += [first + sum(len(x) for x in idx), len(tri)]
+            idx.append(tri)
+        table.append(row)
+    return np.concatenate(idx).astype(np.uint32), np.array(table, dtype=np.float64)
 
 
 def _house() -> list[np.ndarray]:
@@ -302,6 +368,9 @@ def build(name: str) -> Mesh:
     skirt = _far_skirt()
     far = (len(ti), len(skirt))
     ti = np.concatenate([ti, np.arange(len(tv), len(tv) + len(skirt), dtype=np.uint32)])
+    lod, table = _terrain_lods(TERRAIN_CELLS, len(ti))
+    ti = np.concatenate([ti, lod])
+    tc = np.concatenate([tc, table], axis=1)
     tv = np.concatenate([tv, skirt])
     E = terrain.EXTENT
     F = SKIRT_OUTER
@@ -327,5 +396,5 @@ def _calibration() -> Mesh:
     ground = _quad((-E, 0.0, E), (E, 0.0, E), (E, 0.0, -E), (-E, 0.0, -E), _rgb(CALIBRATION_GROUND), 3.0)
     boxes = [box(lo, hi, _rgb(c), 3.0) for lo, hi, c in CALIBRATION_BOXES]
     empty_v = np.zeros((0, VERTEX_FLOATS), np.float32)
-    return Mesh(empty_v, np.zeros(0, np.uint32), np.zeros((0, 6)), np.concatenate([ground] + boxes),
+    return Mesh(empty_v, np.zeros(0, np.uint32), np.zeros((0, 10)), np.concatenate([ground] + boxes),
                 (np.array([0.0, 0.0, -60.0]), 150.0))

@@ -36,8 +36,8 @@ class ShadowPass(Pass):
         r.ctx.enable(moderngl.DEPTH_TEST)
         r.ctx.disable(moderngl.CULL_FACE)
         set_uniform(r.shadow_prog, "uSunViewProj", f.sun_view_proj)
-        for shadow_vao in mesh.shadow:
-            shadow_vao.render(moderngl.TRIANGLES)
+        for shadow_vao, count in mesh.shadow:   # the terrain at full detail, and the objects
+            shadow_vao.render(moderngl.TRIANGLES, vertices=count)
         sm = r.shadow
         # the lightmap's square: the shadow map's cube's, in x and z
         sm.lightmap_rect = np.array([center[0] - half, center[2] - half, 0.5 / half, 0.5 / half])
@@ -48,7 +48,7 @@ class ShadowPass(Pass):
             set_uniforms(r.lightmap_prog, {"uSunViewProj": f.sun_view_proj, "uLightmapRect": sm.lightmap_rect,
                                            "uSunDir": look.sun.direction(), "uShadowTexel": 1.0 / SHADOW_SIZE})
             sm.tex.use(TEX["uShadow"])
-            mesh.terrain_bake.render(moderngl.TRIANGLES)
+            mesh.terrain_bake.render(moderngl.TRIANGLES, vertices=mesh.full_detail)
             sm.lightmap.build_mipmaps()
             sm.lightmap.filter = (moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR)
         sm.key = key
