@@ -54,7 +54,7 @@ class Programs:
         """An attribute-less draw (a fullscreen triangle, or instanced quads)."""
         self.vaos[prog].render(mode, vertices=vertices, instances=instances)
 
-    def fog(self, layers: tuple, scale: int, raymarch_steps: int | None = None, sun: bool = False,
+    def fog(self, layers: tuple, raymarch_steps: int | None = None, sun: bool = False,
             shafts: bool = False):
         """The fog pass; particles are left to the quads pass. With raymarch_steps, the
         exponential layers are raymarched instead (the benchmark's comparison); with sun,
@@ -66,4 +66,4 @@ class Programs:
         if shafts:
             extra["SHAFTS"] = SHAFT_SAMPLES
         return self.get(FULLSCREEN, "passes/fog.frag", layers, inline_particles=False,
-                        FOG_SCALE=scale, **extra)
+                        **extra)

@@ -58,10 +58,11 @@ def _layer_seconds(layer, fog_mpx: float) -> float:
 
 
 def program_key(still: StillParams) -> tuple:
-    """What a worker's compiled fog program depends on: the layers' variant, the fog scale,
-    and whether it integrates toward the sun and samples shafts (compile-time defines)."""
+    """What a worker's compiled fog program depends on: the layers' variant, and whether
+    it integrates toward the sun and samples shafts (compile-time defines; the fog scale
+    is a uniform)."""
     e = still.effects
-    return variant(still), e.fog_scale, e.sun_through_fog, e.shafts > 0
+    return variant(still), e.sun_through_fog, e.shafts > 0
 
 
 def jit_seconds(variant: tuple) -> float:

@@ -43,12 +43,12 @@ class FogPass(Pass):
         fbo.use()
         plan = f.fog_plan()
         shafts = e.shafts > 0
-        prog = r.programs.fog(plan.key, e.fog_scale, f.raymarch_steps, e.sun_through_fog, shafts)
+        prog = r.programs.fog(plan.key, f.raymarch_steps, e.sun_through_fog, shafts)
         bind_fog(r, prog, plan)
         v = f.view
         # the angle one fog texel subtends (vertically), for filtering distant noise
         footprint = 2.0 * math.tan(math.radians(f.still.camera.fov) / 2.0) / f.still.height * e.fog_scale
-        set_uniforms(prog, {"uFwd": v.fwd, "uRight": v.right, "uUp": v.up,
+        set_uniforms(prog, {"uFogScale": e.fog_scale, "uFwd": v.fwd, "uRight": v.right, "uUp": v.up,
                             "uSkyDistance": e.sky_distance, "uSunDir": f.still.sun.direction(),
                             "uNoiseFootprint": footprint})
         if shafts:

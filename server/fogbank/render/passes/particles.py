@@ -22,9 +22,9 @@ class ParticlesPass(Pass):
         if not swarms:
             return
         e = f.still.effects
-        prog = r.programs.get("passes/particles.vert", "passes/particles.frag", FOG_SCALE=e.fog_scale)
+        prog = r.programs.get("passes/particles.vert", "passes/particles.frag")
         v = f.view
-        set_uniforms(prog, {"uEye": v.eye, "uFwd": v.fwd, "uRight": v.right, "uUp": v.up,
+        set_uniforms(prog, {"uFogScale": e.fog_scale, "uEye": v.eye, "uFwd": v.fwd, "uRight": v.right, "uUp": v.up,
                             "uViewProj": v.view_proj, "uDensity": plan.uniforms["uDensity"],
                             "uSkyDistance": e.sky_distance,
                             "uStartDistance": e.start_distance,

@@ -1,5 +1,5 @@
-// The fog pass (Biri 4.1, 4.2): per texel of the fog target (1/FOG_SCALE of the frame,
-// FOG_SCALE = 1, 2 or 4 defined by the renderer), rebuild the visible point from the
+// The fog pass (Biri 4.1, 4.2): per texel of the fog target (1/uFogScale of the frame,
+// uFogScale = 1, 2 or 4), rebuild the visible point from the
 // G-buffer and integrate the fog along eye -> point. Writes the raw transmittance (the
 // composite applies global density and max opacity, after the particle quads have
 // multiplied theirs in), the inverse distance used, for the depth-aware upsample, and,
