@@ -115,7 +115,7 @@ def test_a_costly_look_is_previewed_smaller_and_refined_at_full_size():
     thin.apply(msg('{"type": "play", "playing": false}'), 0.0)
     thin.apply(msg('{"type": "view", "width": 640, "height": 100}'), 0.0)
     thin.apply(msg('{"type": "interact", "active": true}'), 0.0)
-    thin.preview_scale = 0.25
+    thin.preview_rung = 4   # 0.25 of the side
     job = thin.start_frame(0.1)
     assert (job.still.width, job.still.height) == (410, 64)     # k = 64/100 on both sides
     # input stops: the refinement is the view's own size, whatever the previews were
@@ -181,3 +181,74 @@ def test_paused_state_is_in_the_page_url():
     assert s.state(0.0)["query"] == "v=1&time=7&play=0"
     s.apply(msg('{"type": "play", "playing": true}'), 1.0)
     assert s.state(1.0)["query"] == "v=1&time=7"
+
+
+def test_a_look_made_costly_in_one_step_starts_its_previews_where_its_estimate_fits():
+    """Issue 13: 16 volume-noise layers of 128 samples set in one message. The ladder alone
+    would first draw that look at the old look's size (tens of seconds a frame at 960x540);
+    instead its first preview is on a rung the cost model, calibrated by what this
+    session's previews measured, puts within the budget: here past the smallest size, with
+    a share of the samples. A change that leaves the cost alone (density) keeps the rung."""
+    from fogbank.stream.session import PREVIEW_RUNGS
+    from fogbank.workers.cost import estimate
+    s = Session("a", now=0.0)
+    s.apply(msg('{"type": "view", "width": 960, "height": 540}'), 0.0)
+    s.apply(msg('{"type": "interact", "active": true}'), 0.0)
+    t = 0.0
+    for _ in range(3):   # the default look, measured at half its estimate
+        t += 0.1
+        s.apply(msg('{"type": "camera", "camera": {"yaw": %s}}' % t), t)
+        job = s.start_frame(t)
+        s.measured(job, 0.5 * estimate(job.still, msaa=False, compiled=True).seconds * 1000, t)
+        s.frame_done(job, sent=True)
+        s.apply(msg(f'{{"type": "ack", "frame": {job.frame}}}'), t)
+    assert abs(s.cost_ratio - 0.5) < 0.05
+    layers = ",".join(['{"kind": "noise", "mode": "volume", "samples": 128}'] * 16)
+    s.apply(msg('{"type": "params", "params": {"layers": [%s]}}' % layers), t + 0.1)
+    job = s.start_frame(t + 0.1)
+    share, detail = PREVIEW_RUNGS[job.rung]
+    assert (job.still.width, job.still.height) == (240, 136) and share == 0.25
+    assert detail < 1.0 and {l.samples for l in job.still.layers} == {max(1, -(-128 * detail // 1))}
+    fits = 0.5 * estimate(job.still, msaa=False, compiled=True).seconds * 1000 <= PREVIEW_BUDGET_MS
+    assert fits or job.rung == len(PREVIEW_RUNGS) - 1
+    s.frame_done(job, sent=True)
+    s.apply(msg(f'{{"type": "ack", "frame": {job.frame}}}'), t + 0.1)
+    s.apply(msg('{"type": "params", "params": {"density": 1.3}}'), t + 0.2)
+    assert s.start_frame(t + 0.2).rung == job.rung
+
+
+def test_a_refinement_is_the_full_look_unless_its_estimate_is_over_the_budget():
+    """After input stops: the default look is refined at full size with MSAA; 16 layers of
+    128-sample volume noise (estimated at seconds a frame) are refined at the sharpest rung
+    whose calibrated estimate fits REFINE_BUDGET_MS when paused, PLAY_BUDGET_MS while time
+    runs (the next input waits for the frame in flight)."""
+    from fogbank.stream.session import PLAY_BUDGET_MS, REFINE_BUDGET_MS
+    from fogbank.workers.cost import estimate
+    for playing, budget in ((False, REFINE_BUDGET_MS), (True, PLAY_BUDGET_MS)):
+        s = Session("a", now=0.0)
+        s.apply(msg('{"type": "view", "width": 960, "height": 540}'), 0.0)
+        s.apply(msg('{"type": "play", "playing": %s}' % str(playing).lower()), 0.0)
+        s.cost_ratio = 0.5   # as if measured
+        job = s.start_frame(1.0)
+        assert job.full and job.msaa and (job.still.width, job.still.height) == (960, 540)
+        layers = ",".join(['{"kind": "noise", "mode": "volume", "samples": 128}'] * 16)
+        s.apply(msg('{"type": "params", "params": {"layers": [%s]}}' % layers), 2.0)
+        s.frame_done(job, sent=False)
+        job = s.start_frame(2.0 + 2 * INPUT_SETTLE_S)
+        assert job.full and not job.msaa
+        assert 0.5 * estimate(job.still, msaa=False, compiled=True).seconds * 1000 <= budget
+
+
+def test_a_look_near_the_play_budget_keeps_its_refinement_quality():
+    """Hysteresis: a playing look whose calibrated estimate drifts to 1.1 times the budget
+    keeps MSAA (it would flicker between qualities frame to frame); past 1.25 times it
+    drops it."""
+    from fogbank.stream.session import PLAY_BUDGET_MS
+    from fogbank.workers.cost import estimate
+    s = Session("a", now=0.0)
+    s.apply(msg('{"type": "view", "width": 960, "height": 540}'), 0.0)
+    full = estimate(s.start_frame(1.0).still, msaa=True, compiled=True).seconds * 1000
+    for ratio, msaa in ((1.1, True), (1.3, False), (1.1, False), (0.7, True)):
+        s.cost_ratio = ratio * PLAY_BUDGET_MS / full
+        s.making = 0
+        assert s.start_frame(2.0).msaa == msaa

@@ -29,9 +29,43 @@ PREVIEW_QUALITY = 60      # JPEG quality while the user drags
 # costly look blurs while it is dragged instead of dropping the page's frame rate); the
 # full-quality frame after input stops is always the view's size (Session.measured).
 PREVIEW_BUDGET_MS = 60.0
-PREVIEW_SCALES = (1.0, 0.75, 0.5, 0.35, 0.25)   # of the view's side: few sizes, few cached targets
+# The previews' ladder, sharpest first: (share of the view's side, detail). Detail below 1
+# takes that share of each volume-noise layer's samples per ray and of each particle
+# layer's particles (_detailed), the costs a smaller picture does not shrink enough. Few
+# sizes, few cached targets.
+PREVIEW_RUNGS = ((1.0, 1.0), (0.75, 1.0), (0.5, 1.0), (0.35, 1.0), (0.25, 1.0), (0.25, 0.25), (0.25, 1 / 16))
+PREVIEW_SCALES = tuple(dict.fromkeys(k for k, _ in PREVIEW_RUNGS))
 PREVIEW_MIN_SIDE = 64
-PREVIEW_COST_TTL_S = 2.0   # a scale's measured cost is trusted this long (the look may change)
+PREVIEW_COST_TTL_S = 2.0   # a rung's measured cost is trusted this long (the look may change)
+# A new look whose estimated cost (workers/cost.py, scaled by what this session's previews
+# measured against their estimates) differs this much from the last one's starts on the
+# rung the estimate picks, not where the old look's measurements left the ladder: a look
+# made costly in one step (16 layers of volume noise) would otherwise spend seconds on
+# frames at the old size before the ladder came down.
+PREVIEW_RECOST = 1.5
+PREVIEW_FIRST_OVER = 8.0   # the default look's first preview at 960x540 is estimated at 256 ms (measured 60-110)
+# The refinement after input stops is the full look unless its calibrated estimate is over
+# this: then the sharpest of (no MSAA, then the preview rungs) that fits. A refinement is one
+# frame no input can interrupt (GL draws are not cancelled), and the worker it runs on draws
+# every other session's frames meanwhile: 16 layers of 128-sample volume noise at 960x540
+# took past the 10 s frame deadline, and every slider moved meanwhile waited for it.
+REFINE_BUDGET_MS = 2000.0
+# While time runs, every frame after input stops is a full one: the next input waits for the
+# one in flight, so those are held to this (calibrated, as above) instead.
+PLAY_BUDGET_MS = 400.0
+
+
+def _detailed(layer, detail: float):
+    """A layer at a share of its cost for a preview rung: a volume-noise layer with that
+    share of its samples per ray, a particle layer with that share of its particles, each
+    as much more opaque (the swarm's optical depth kept, its grain coarser); others as
+    they are."""
+    if layer.kind == "noise" and layer.mode == "volume":
+        return layer.model_copy(update={"samples": max(1, math.ceil(layer.samples * detail))})
+    if layer.kind == "particles":
+        count = max(1, math.ceil(layer.count * detail))
+        return layer.model_copy(update={"count": count, "alpha": min(1.0, layer.alpha * layer.count / count)})
+    return layer
 
 
 @dataclass
@@ -47,6 +81,8 @@ class FrameJob:
     show: str = "shaded"   # or a view that teaches (render/teach.py), with its layer
     layer: int = 0
     scale: float = 1.0     # a preview's share of the view's side
+    rung: int = 0          # its rung of PREVIEW_RUNGS
+    estimate_ms: float = 0.0   # its estimated render time (workers/cost.py, uncalibrated)
 
 
 class Session:
@@ -68,8 +104,11 @@ class Session:
         self.playing = True
         self.speed = 1.0
         self.stalled = -1         # the version whose frame passed its deadline
-        self.preview_scale = 1.0  # of the view's side, for previews
-        self.preview_costs: dict[float, tuple[float, float]] = {}   # scale -> (ms, when measured)
+        self.preview_rung = 0     # of PREVIEW_RUNGS, for previews
+        self.preview_costs: dict[int, tuple[float, float]] = {}   # rung -> (ms, when measured)
+        self.cost_ratio = 1.0     # measured / estimated render time of this session's frames
+        self.refine_level = 0     # the refinement's last quality (Session._refinement)
+        self.costed: tuple[int, FogParams | None] = (-1, None)   # the look last costed, and its version
         self.fog = FogParams.model_validate(P.preset_dict("default"))
         self._base_sim = self.fog.time
         self._base_wall = now
@@ -204,31 +243,96 @@ class Session:
             return None
         return max(now, self.last_start + 1.0 / self.view.fps)
 
+    @property
+    def preview_scale(self) -> float:
+        return PREVIEW_RUNGS[self.preview_rung][0]
+
+    def _preview_still(self, fog: FogParams, rung: int, now: float) -> StillParams:
+        """The look as previewed on a rung: coarser fog (no finer than 1/2, 1/4 past 640x360),
+        its share of the view's side (the view's shape kept, the short side at least
+        PREVIEW_MIN_SIDE or the view's own) and its detail."""
+        v = self.view
+        k, detail = PREVIEW_RUNGS[rung]
+        eff = fog.effects.model_copy(update={"fog_scale": max(fog.effects.fog_scale,
+                                                              2 if v.width * v.height <= 640 * 360 else 4)})
+        width, height = v.width, v.height
+        if k < 1.0:
+            k = min(1.0, max(k, PREVIEW_MIN_SIDE / min(v.width, v.height)))
+            width, height = (max(2, 2 * round(side * k / 2)) for side in (v.width, v.height))
+        layers = fog.layers
+        if detail < 1.0:
+            layers = [_detailed(l, detail) for l in layers]
+        return StillParams.model_construct(**{**dict(fog), "layers": layers, "effects": eff,
+                                              "time": self.sim_time(now), "width": width, "height": height})
+
+    @staticmethod
+    def _estimate_ms(still: StillParams, msaa: bool = False) -> float:
+        """The cost model's render time of a frame (workers/cost.py), uncalibrated."""
+        from fogbank.workers.cost import estimate
+        return estimate(still, msaa=msaa, compiled=True).seconds * 1000.0
+
+    def _recost(self, fog: FogParams, now: float) -> None:
+        """On a new look whose estimate at the current rung differs from the last costed
+        look's (at that rung) by PREVIEW_RECOST, or on a session's first preview estimated
+        PREVIEW_FIRST_OVER times over the budget, start from the sharpest rung whose
+        estimate, calibrated by this session's measurements, is within the budget (else the
+        last rung), and forget the old look's measurements."""
+        _, old = self.costed
+        est = self._estimate_ms(self._preview_still(fog, self.preview_rung, now))
+        last = self._estimate_ms(self._preview_still(old, self.preview_rung, now)) if old is not None else None
+        if (max(est / last, last / est) > PREVIEW_RECOST if last is not None
+                else self.cost_ratio * est > PREVIEW_FIRST_OVER * PREVIEW_BUDGET_MS):
+            self.preview_costs.clear()
+            self.preview_rung = next(
+                (i for i in range(len(PREVIEW_RUNGS))
+                 if self.cost_ratio * self._estimate_ms(self._preview_still(fog, i, now)) <= PREVIEW_BUDGET_MS),
+                len(PREVIEW_RUNGS) - 1)
+        self.costed = (self.version, fog)
+
+    def _refinement(self, fog: FogParams, now: float) -> tuple[StillParams, bool]:
+        """The frame after input stops, and whether with MSAA: the full look, unless its
+        calibrated estimate is over REFINE_BUDGET_MS (PLAY_BUDGET_MS while time runs; see
+        there); then the first of (no MSAA, the preview rungs) that fits. With hysteresis: a
+        quality is left for a lower one only past 1.25 times the budget, for a higher one
+        only under 0.8 times it, so that a look near the budget does not flicker between."""
+        v = self.view
+        still = StillParams.model_construct(**{**dict(fog), "time": self.sim_time(now),
+                                               "width": v.width, "height": v.height})
+        budget = PLAY_BUDGET_MS if self.playing else REFINE_BUDGET_MS
+        levels = [(still, True), (still, False)] + [(self._preview_still(fog, i, now), False)
+                                                    for i in range(len(PREVIEW_RUNGS))]
+        cost = [self.cost_ratio * self._estimate_ms(st, msaa=m) for st, m in levels]
+        want = next((i for i, c in enumerate(cost) if c <= budget), len(levels) - 1)
+        keep = min(self.refine_level, len(levels) - 1)
+        if (want > keep and cost[keep] <= 1.25 * budget) or (want < keep and cost[want] > 0.8 * budget):
+            want = keep
+        self.refine_level = want
+        return levels[want]
+
     def start_frame(self, now: float) -> FrameJob:
         preview = self.previewing(now)
         v = self.view
         fog = self.fog
-        scale = fog.effects.fog_scale
-        if preview:   # cheaper while dragging: coarser fog, no MSAA, lower JPEG quality
-            scale = max(scale, 2 if v.width * v.height <= 640 * 360 else 4)
-        eff = fog.effects.model_copy(update={"fog_scale": scale})
-        width, height = v.width, v.height
-        if preview and self.preview_scale < 1.0:
-            # one scale for both sides (the view's shape kept), its short side at least
-            # PREVIEW_MIN_SIDE (or the view's own, if shorter)
-            k = min(1.0, max(self.preview_scale, PREVIEW_MIN_SIDE / min(v.width, v.height)))
-            width, height = (max(2, 2 * round(side * k / 2)) for side in (v.width, v.height))
-        still = StillParams.model_construct(**{**dict(fog), "effects": eff, "time": self.sim_time(now),
-                                               "width": width, "height": height})
+        msaa = True
+        if preview:   # cheaper while dragging: coarser fog, no MSAA, lower JPEG quality, the ladder
+            if self.costed[0] != self.version:
+                self._recost(fog, now)
+            still = self._preview_still(fog, self.preview_rung, now)
+            estimate_ms = self._estimate_ms(still)
+        else:
+            still, msaa = self._refinement(fog, now)
+            estimate_ms = self._estimate_ms(still, msaa=msaa)
         self.frame += 1
         self.making += 1
         self.last_start = now
         self.dirty = False
         self.last_full = not preview
-        return FrameJob(self.frame, self.version, still, msaa=not preview,
+        return FrameJob(self.frame, self.version, still, msaa=not preview and msaa,
                         quality=min(v.quality, PREVIEW_QUALITY) if preview else v.quality,
                         full=not preview, playing=self.playing, show=self.showing(), layer=v.layer,
-                        scale=self.preview_scale if preview else 1.0)
+                        scale=self.preview_scale if preview else 1.0,
+                        rung=self.preview_rung if preview else 0,
+                        estimate_ms=estimate_ms)
 
     def showing(self) -> str:
         """What the frames show: the view's choice, or the look while it asks for the
@@ -247,35 +351,37 @@ class Session:
         self.dirty = False
 
     def measured(self, job: FrameJob, render_ms: float, now: float) -> None:
-        """A frame's render time. Previews climb PREVIEW_SCALES by what they cost: a
-        preview over PREVIEW_BUDGET_MS makes the next one a step smaller; one well under
-        it (a fifth to spare) a step larger, unless that size was measured over the
+        """A frame's render time. Previews climb PREVIEW_RUNGS by what they cost: a
+        preview over PREVIEW_BUDGET_MS makes the next one a rung lower; one well under
+        it (a fifth to spare) a rung higher, unless that rung was measured over the
         budget within PREVIEW_COST_TTL_S. Costs are measured, not modelled: a frame's
         fixed costs (shadow map, sky, particles) do not shrink with its pixels, so a step
-        down that did not pay (the size above cost at most a quarter more) is taken back,
-        and one known not to pay is not taken."""
+        down that did not pay (the rung above cost at most a quarter more) is taken back,
+        and one known not to pay is not taken. What previews measure against their
+        estimates calibrates the estimates of the next new look (_recost)."""
+        if job.estimate_ms > 0:   # raw estimate: measured / estimated, smoothed
+            r = min(max(render_ms / job.estimate_ms, 0.05), 20.0)
+            self.cost_ratio = math.exp(0.5 * math.log(self.cost_ratio) + 0.5 * math.log(r))
         if job.full:
             return
-        prev = self.preview_costs.get(job.scale)
+        prev = self.preview_costs.get(job.rung)
         ms = render_ms if prev is None or now - prev[1] > PREVIEW_COST_TTL_S else 0.5 * (prev[0] + render_ms)
-        self.preview_costs[job.scale] = (ms, now)
-        if job.scale != self.preview_scale:
-            return   # a frame of an earlier step: recorded, no step taken
-        i = PREVIEW_SCALES.index(self.preview_scale)
+        self.preview_costs[job.rung] = (ms, now)
+        if job.rung != self.preview_rung:
+            return   # a frame of an earlier rung: recorded, no step taken
+        i = self.preview_rung
         fresh = lambda k: (c := self.preview_costs.get(k)) is not None and now - c[1] <= PREVIEW_COST_TTL_S  # noqa: E731
-        if i > 0 and fresh(PREVIEW_SCALES[i - 1]) and self.preview_costs[PREVIEW_SCALES[i - 1]][0] <= 1.25 * ms:
+        if i > 0 and fresh(i - 1) and self.preview_costs[i - 1][0] <= 1.25 * ms:
             # the step down did not pay (the cost is fixed, not in the pixels): back up
-            self.preview_scale = PREVIEW_SCALES[i - 1]
-        elif ms > PREVIEW_BUDGET_MS and i + 1 < len(PREVIEW_SCALES):
-            down = PREVIEW_SCALES[i + 1]
+            self.preview_rung = i - 1
+        elif ms > PREVIEW_BUDGET_MS and i + 1 < len(PREVIEW_RUNGS):
             # no step down that did not pay: a look whose cost is fixed (not in its
             # pixels) keeps its sharper preview
-            if not (fresh(down) and self.preview_costs[down][0] > 0.8 * ms):
-                self.preview_scale = down
+            if not (fresh(i + 1) and self.preview_costs[i + 1][0] > 0.8 * ms):
+                self.preview_rung = i + 1
         elif ms < 0.8 * PREVIEW_BUDGET_MS and i > 0:
-            up = PREVIEW_SCALES[i - 1]
-            if not fresh(up) or self.preview_costs[up][0] <= PREVIEW_BUDGET_MS:
-                self.preview_scale = up
+            if not fresh(i - 1) or self.preview_costs[i - 1][0] <= PREVIEW_BUDGET_MS:
+                self.preview_rung = i - 1
 
     def frame_done(self, job: FrameJob, sent: bool) -> None:
         """A frame was sent (or dropped: failed, stale, or the client left)."""

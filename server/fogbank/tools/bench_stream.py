@@ -125,32 +125,41 @@ def run(url: str, query: str = "v=1") -> list[dict]:
 
 
 async def drag_latency(url: str, look: dict, width: int, height: int, changes: int = 24,
-                       every_s: float = 0.15, settle_s: float = 20.0) -> dict:
-    """A slider dragged over a costly look, as the page does it: the look is set, its
-    first frames awaited (`settle_s` at most: a new fog program compiles on its first
-    draw), then `interact` on and a change of the global density every `every_s` while
-    time runs. The latency of each change is the time to the first frame whose params
-    version shows it (a later change's frame counts for it too: the page shows the
-    newest look). Also the previews' median width and the frames' render ms."""
+                       every_s: float = 0.15, settle_s: float = 30.0) -> dict:
+    """A slider dragged over a costly look, as the page does it. The look is set and its
+    frames awaited: the first (first_ms: a new fog program compiles on its first draw) and
+    the refined one after input stops (refined_ms), `settle_s` at most, as a user looks at
+    a look before changing it. Then `interact` on and a change of the global density every
+    `every_s` while time runs. The latency of each change is the time to the first frame
+    whose params version shows it (a later change's frame counts for it too: the page shows
+    the newest look). Also the previews' median width and the frames' render ms."""
+    from fogbank.stream.protocol import FLAG_FULL
     ws = await _session(url, "v=1", width, height, 120)
     lat: list[float] = []
     widths: list[int] = []
     render: list[float] = []
+    first_ms = refined_ms = None
     try:
+        sent = time.monotonic()
         await ws.send(json.dumps({"type": "params", "params": look, "replace": True}))
         version = [None]
 
         async def on_text(t):
             if t.get("type") == "state":
                 version[0] = t["version"]
-        got = asyncio.Event()
+        refined = asyncio.Event()
 
-        async def first(h):
+        async def settle(h):
+            nonlocal first_ms, refined_ms
             if version[0] is not None and h[2] >= version[0]:
-                got.set()
+                if first_ms is None:
+                    first_ms = (time.monotonic() - sent) * 1000
+                if h[9] & FLAG_FULL:
+                    refined_ms = (time.monotonic() - sent) * 1000
+                    refined.set()
         end = time.monotonic() + settle_s
-        while not got.is_set() and time.monotonic() < end:
-            await _frames(ws, 0.1, on_frame=first, on_text=on_text)
+        while not refined.is_set() and time.monotonic() < end:
+            await _frames(ws, 0.1, on_frame=settle, on_text=on_text)
         await ws.send(json.dumps({"type": "interact", "active": True}))
         pending: list[tuple[int | None, float]] = []   # (version, sent)
 
@@ -181,4 +190,5 @@ async def drag_latency(url: str, look: dict, width: int, height: int, changes: i
     pick = lambda q: lat[min(len(lat) - 1, int(q * len(lat)))]  # noqa: E731
     return {"p50_ms": pick(0.5), "p95_ms": pick(0.95), "max_ms": lat[-1], "n": len(lat),
             "preview_width": statistics.median(widths) if widths else 0,
-            "render_ms": statistics.median(render) if render else 0.0}
+            "render_ms": statistics.median(render) if render else 0.0,
+            "first_ms": first_ms, "refined_ms": refined_ms}
