@@ -86,26 +86,27 @@ def test_the_passes_read_only_what_earlier_passes_wrote():
 
 def test_interleaved_layers_of_repeated_kinds_each_read_their_own_slot(renderer):
     """The loops over layers of one kind (kinds/packing.py layer_code, loop_tables) against
-    the float64 closed forms. Heights, spheres, cosines and ellipsoids interleaved, each with its own parameters
+    the float64 closed forms. Boxes, potentials and cosines interleaved with others, each with its own parameters
     (a loop reading the wrong slot would move or swap a layer), give the fog texels'
     transmittance of the float64 reference; the program holds each kind's code once."""
     layers = [
-        {"kind": "height", "density": 0.02, "falloff": 0.2, "base": 0.0},
-        {"kind": "sphere", "center": (-20.0, 10.0, 20.0), "radius": 25.0, "density": 0.05},
+        {"kind": "box", "center": (-20.0, 10.0, 20.0), "half_size": (25.0, 10.0, 15.0), "density": 0.04},
+        {"kind": "potential", "center": (10.0, 5.0, -30.0), "strength": 1.0, "c": 20.0, "e": 1.0},
         {"kind": "height", "density": 0.01, "falloff": 0.05, "base": 10.0},
         {"kind": "cosine", "density": 0.01, "c0": 1.0, "scale": 15.0,
          "terms": [{"amp": 0.6, "k": (1.0, 0.0, 0.3), "phase": 0.2}]},
-        {"kind": "sphere", "center": (30.0, 5.0, -40.0), "radius": 40.0, "density": 0.02},
+        {"kind": "box", "center": (30.0, 5.0, -40.0), "half_size": (40.0, 8.0, 20.0), "yaw": 30.0,
+         "density": 0.02},
         {"kind": "ellipsoid", "center": (0.0, 6.0, 0.0), "radii": (30.0, 8.0, 15.0), "density": 0.06},
         {"kind": "cosine", "density": 0.02, "c0": 1.0, "scale": 40.0,
          "terms": [{"amp": 0.9, "k": (0.0, 1.0, 1.0), "phase": 1.0}]},
-        {"kind": "height", "density": 0.03, "falloff": 0.4, "base": -5.0},
+        {"kind": "potential", "center": (-40.0, 2.0, -10.0), "strength": 2.0, "c": 30.0, "e": 1.5},
     ]
     still = StillParams.model_validate({**P.preset_dict("default"), "layers": layers, "width": 160,
                                         "height": 90, "time": 2.0,
                                         "effects": {**P.preset_dict("default")["effects"], "fog_scale": 1}})
     code = layer_code(variant(still))
-    assert [code.count(f) for f in ("heightOpticalDepth(", "sphereOpticalDepth(", "cosineTermOpticalDepth(")] \
+    assert [code.count(f) for f in ("boxOpticalDepth(", "potentialOpticalDepth(", "cosineTermOpticalDepth(")] \
         == [1, 1, 1]
     _, T, invd, view = fog_only(renderer, still)
     ref = _reference(still, invd.astype(np.float64), view)
@@ -115,8 +116,8 @@ def test_interleaved_layers_of_repeated_kinds_each_read_their_own_slot(renderer)
     tau, tau_ref = -np.log(np.maximum(T, 1e-30))[seen], -np.log(ref[seen])
     assert float(np.abs(tau - tau_ref).max()) < 1e-3   # optical depths up to ~7 here
     # and every repeated layer counts: without any one of them, the optical depth is off by
-    # far more than that somewhere (0.33 to 4.2 here)
-    for k in (0, 1, 2, 3, 4, 6):
+    # a hundred times that somewhere
+    for k in (0, 1, 3, 4, 6, 7):
         fewer = still.model_copy(update={"layers": still.layers[:k] + still.layers[k + 1:]})
         tau_fewer = -np.log(_reference(fewer, invd.astype(np.float64), view)[seen])
-        assert float(np.abs(tau - tau_fewer).max()) > 0.3
+        assert float(np.abs(tau - tau_fewer).max()) > 0.1

@@ -179,16 +179,18 @@ def test_strings_never_pass_into_the_look(patch):
 
 def test_layers_of_one_kind_are_one_loop_over_their_slots_wherever_they_sit():
     """layer_code writes each repeated kind's code once, in a loop over the slots that
-    loop_tables lists; a kind that appears once stays inline at its own slot."""
+    loop_tables lists; a kind that appears once, or whose code is tiny (Kind.loop False:
+    height), stays inline at its own slot."""
     from fogbank.kinds.packing import layer_code, loop_tables
-    key = (("height", ()), ("sphere", ()), ("height", ()), ("cosine", (2,)), ("sphere", ()),
-           ("cosine", (3,)), ("height", ()))
+    key = (("box", ()), ("potential", ()), ("box", ()), ("cosine", (2,)), ("potential", ()),
+           ("cosine", (3,)), ("box", ()), ("height", ()), ("height", ()))
     code = layer_code(key)
-    assert code.count("heightOpticalDepth(") == 1
-    assert code.count("sphereOpticalDepth(") == 1
+    assert code.count("boxOpticalDepth(") == 1
+    assert code.count("potentialOpticalDepth(") == 1
     assert code.count("cosineTermOpticalDepth(") == 2 + 3   # two variants, each inline once
+    assert code.count("heightOpticalDepth(") == 2            # tiny: inline, each at its slot
     assert code.count("for (int i = ") == 2
     slots, counts = loop_tables(key)
-    assert list(slots[:5]) == [0, 2, 6, 1, 4]    # the heights' slots, then the spheres'
+    assert list(slots[:5]) == [0, 2, 6, 1, 4]    # the boxes' slots, then the potentials'
     assert list(counts[:3]) == [3, 2, 0]
-    assert "uLayer[60 + 0]" not in code and "uLayer[36]" in code   # cosine (3) inline at slot 5 (36 = 3 * 12)
+    assert "uLayer[60]" in code and "uLayer[96]" in code and "uLayer[84]" in code   # slots 5, 8, 7

@@ -65,7 +65,7 @@ def loop_tables(key: tuple, inline_particles: bool = True) -> tuple[np.ndarray, 
 
 def _looped(key: tuple, inline_particles: bool) -> list[tuple[tuple, list[int]]]:
     return [(kv, m) for kv, m in groups(key)
-            if len(m) > 1 and (inline_particles or not KINDS[kv[0]].quads)]
+            if len(m) > 1 and KINDS[kv[0]].loop and (inline_particles or not KINDS[kv[0]].quads)]
 
 
 def layer_code(key: tuple, inline_particles: bool = True) -> str:
@@ -74,27 +74,28 @@ def layer_code(key: tuple, inline_particles: bool = True) -> str:
 
     Layers of one kind and variant, wherever they sit among the others, are one loop over
     their slots, its body the kind's code once: llvmpipe's compile time grows faster than
-    the program (16 cosine layers of 8 terms inlined took over 10 s to compile, the
-    stream's frame deadline; 16 volume-noise layers over 30 s), and a loop keeps the
-    program the size of its distinct kinds. The slots and the trip counts are read from
-    uniforms (uLayerSlots, uGroupCounts; loop_tables), not written in, so that the
-    compiler does not unroll the loops back into the inlined program. Every layer adds
-    to the same sums (tau, tauDirect), so their order does not matter beyond rounding."""
+    the program (16 cosine layers of 8 terms inlined took 43 s to compile, past the
+    stream's frame deadline; 16 boxes over 40 s; 16 volume-noise layers over 60 s), and a
+    loop keeps the program the size of its distinct kinds. The slots and the trip counts
+    are read from uniforms (uLayerSlots, uGroupCounts; loop_tables), not written in, so
+    that the compiler does not unroll the loops back into the inlined program. Kinds whose
+    code is tiny (Kind.loop False) stay inline. Every layer adds to the same sums (tau,
+    tauDirect), so their order does not matter beyond rounding."""
+    looped = dict(_looped(key, inline_particles))
     lines = []
-    looped = {kv for kv, _ in _looped(key, inline_particles)}
     pos = g = 0
-    for kv, members in groups(key):
+    for n, kv in enumerate(key):
         name, v = kv
         kind = KINDS[name]
         label = f"{name} {' '.join(map(str, v))}".rstrip()
-        where = ", ".join(map(str, members))
         if kind.quads and not inline_particles:
-            lines.append(f"// layer(s) {where}: {name}, drawn by their own pass")
+            lines.append(f"// layer {n}: {name}, drawn by its own pass")
         elif kv not in looped:
-            lines.append(f"// layer {where}: {label}")
-            lines.append(kind.code(kind.layout.refs(members[0] * LAYER_VEC4), v))
-        else:
-            lines.append(f"// layers {where}: {label}")
+            lines.append(f"// layer {n}: {label}")
+            lines.append(kind.code(kind.layout.refs(n * LAYER_VEC4), v))
+        elif looped[kv][0] == n:   # the loop, where its first layer sits
+            members = looped[kv]
+            lines.append(f"// layers {', '.join(map(str, members))}: {label}")
             lines.append(f"for (int i = {pos}; i < {pos} + int(uGroupCounts[{g // 4}].{'xyzw'[g % 4]}); ++i) {{")
             lines.append(f"int layerBase = {LAYER_VEC4} * int(uLayerSlots[i / 4][i % 4]);")
             lines.append(kind.code(kind.layout.refs("layerBase"), v))

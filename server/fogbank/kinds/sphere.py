@@ -60,4 +60,5 @@ KIND = Kind(
     code=exponential("sphereOpticalDepth(Os, w, ds, {center}, {radius}, {density})"),
     density_code=lambda r, v: r.format("rho += sphereDensity(x, {center}, {radius}, {density});"),
     sample=sample, optical_depth=optical_depth, density=density,
+    loop=False,   # tiny code: inlined (kinds/kind.py Kind.loop)
 )

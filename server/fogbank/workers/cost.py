@@ -75,9 +75,11 @@ def jit_seconds(variant: tuple) -> float:
 
 
 def estimate(still: StillParams, msaa: bool = True, fmt: str = "jpg", scale: float = 1.0,
-             compiled: bool = False) -> Cost:
+             compiled: bool = False, baked: bool = False) -> Cost:
     """Seconds and memory to render and encode `still` (`scale` multiplies seconds); the
-    fog program's first-draw compile is included unless `compiled`."""
+    fog program's first-draw compile is included unless `compiled`, the noise tile's bake
+    unless `baked` (both once per worker: a stream's frame-to-frame estimates leave them
+    out)."""
     px = still.width * still.height
     mpx = px / 1e6
     e = still.effects
@@ -100,7 +102,7 @@ def estimate(still: StillParams, msaa: bool = True, fmt: str = "jpg", scale: flo
     if filtered:   # passes/fog_filter.py
         parts["the filter of jittered samples (volume noise, shafts)"] = JITTER_FILTER_S_PER_FOG_MPX * fog_mpx
     n = still.noise
-    if uses_noise(still) and (n.size, n.octaves, n.blur, n.seed) != DEFAULT_BAKE:
+    if not baked and uses_noise(still) and (n.size, n.octaves, n.blur, n.seed) != DEFAULT_BAKE:
         parts[f"noise.size = {n.size} (baking the noise tile, once per worker)"] = bake_seconds(n)
     if not compiled:
         key = variant(still)
