@@ -252,3 +252,19 @@ def test_a_look_near_the_play_budget_keeps_its_refinement_quality():
         s.cost_ratio = ratio * PLAY_BUDGET_MS / full
         s.making = 0
         assert s.start_frame(2.0).msaa == msaa
+
+
+def test_work_a_worker_does_once_is_not_the_looks_cost():
+    """Found by review: a noise tile of another size is baked once per worker (seconds), and
+    the estimates counted it in every frame, so the refinement fell to the smallest rung;
+    and the 8 s frame that baked it skewed the calibration. Neither does now."""
+    s = Session("a", now=0.0)
+    s.apply(msg('{"type": "view", "width": 960, "height": 540}'), 0.0)
+    s.apply(msg('{"type": "play", "playing": false}'), 0.0)
+    s.cost_ratio = 0.5
+    s.apply(msg('{"type": "params", "params": {"noise": {"size": 128}, "layers": '
+                '[{"kind": "noise", "mode": "volume", "samples": 16}]}}'), 0.0)
+    job = s.start_frame(2 * INPUT_SETTLE_S)
+    assert job.full and job.msaa and (job.still.width, job.still.height) == (960, 540)
+    s.measured(job, 8000.0, 1.0, once=True)
+    assert s.cost_ratio == 0.5

@@ -27,6 +27,7 @@ class Programs:
         self.ctx = ctx
         self._cache: OrderedDict = OrderedDict()
         self.vaos: dict = {}   # program -> its empty vertex array (attribute-less draws)
+        self.compiled = 0      # programs made (a frame that made one paid its compile)
 
     def get(self, vert: str, frag: str, layers: tuple | None = None, inline_particles: bool = True,
             **defines):
@@ -37,6 +38,7 @@ class Programs:
         gen = generated(layers, inline_particles) if layers is not None else None
         all_defines = {**DEFINES, **defines}
         prog = program(self.ctx, vert, frag, all_defines, gen)
+        self.compiled += 1
         prog.extra["inline_particles"] = inline_particles   # which layers its loops cover (bind_fog)
         for name, unit in TEX.items():
             if name in prog.extra["declared"]:

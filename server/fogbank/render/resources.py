@@ -95,6 +95,7 @@ class NoiseTiles:
         self.ctx = ctx
         self._tiles: dict[tuple, moderngl.Texture] = {}
         self._none: moderngl.Texture | None = None
+        self.baked = 0   # tiles baked (a frame that baked one paid for it)
 
     def none(self) -> moderngl.Texture:
         if self._none is None:
@@ -104,6 +105,7 @@ class NoiseTiles:
     def get(self, key: tuple) -> moderngl.Texture:
         if key not in self._tiles:
             data = bake(*key)
+            self.baked += 1
             n = key[0]
             # GL wants x fastest; the baked array is indexed [x, y, z]
             tex = self.ctx.texture3d((n, n, n), 1, np.ascontiguousarray(data.transpose(2, 1, 0)).tobytes(),

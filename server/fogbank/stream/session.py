@@ -267,9 +267,11 @@ class Session:
 
     @staticmethod
     def _estimate_ms(still: StillParams, msaa: bool = False) -> float:
-        """The cost model's render time of a frame (workers/cost.py), uncalibrated."""
+        """The cost model's render time of a frame (workers/cost.py), uncalibrated, without
+        what a worker does once (compiling a fog program, baking a noise tile): those are
+        not this look's cost per frame."""
         from fogbank.workers.cost import estimate
-        return estimate(still, msaa=msaa, compiled=True).seconds * 1000.0
+        return estimate(still, msaa=msaa, compiled=True, baked=True).seconds * 1000.0
 
     def _recost(self, fog: FogParams, now: float) -> None:
         """On a new look whose estimate at the current rung differs from the last costed
@@ -350,15 +352,19 @@ class Session:
         self.stalled = self.version
         self.dirty = False
 
-    def measured(self, job: FrameJob, render_ms: float, now: float) -> None:
+    def measured(self, job: FrameJob, render_ms: float, now: float, once: bool = False) -> None:
         """A frame's render time. Previews climb PREVIEW_RUNGS by what they cost: a
         preview over PREVIEW_BUDGET_MS makes the next one a rung lower; one well under
         it (a fifth to spare) a rung higher, unless that rung was measured over the
         budget within PREVIEW_COST_TTL_S. Costs are measured, not modelled: a frame's
         fixed costs (shadow map, sky, particles) do not shrink with its pixels, so a step
         down that did not pay (the rung above cost at most a quarter more) is taken back,
-        and one known not to pay is not taken. What previews measure against their
-        estimates calibrates the estimates of the next new look (_recost)."""
+        and one known not to pay is not taken. What frames measure against their estimates
+        calibrates the estimates of the next new look (_recost) and of the refinement.
+        A frame that did work once (`once`: compiled a program, baked a noise tile) is
+        neither a rung's cost nor a calibration."""
+        if once:   # it compiled a program or baked a noise tile: not what this look costs
+            return
         if job.estimate_ms > 0:   # raw estimate: measured / estimated, smoothed
             r = min(max(render_ms / job.estimate_ms, 0.05), 20.0)
             self.cost_ratio = math.exp(0.5 * math.log(self.cost_ratio) + 0.5 * math.log(r))
