@@ -479,6 +479,7 @@ def process_boundary(n: int = 300) -> dict:
 
 def run(out_dir: str = "docs", quick: bool = False, only_targets: bool = False,
         before: str | None = None) -> dict:
+    earlier = json.loads(Path(before).read_text()) if before else None   # read first: fail fast
     r = Renderer(create_context())
     info = r.info()
     seconds = 3.0 if quick else 6.0
@@ -489,8 +490,8 @@ def run(out_dir: str = "docs", quick: bool = False, only_targets: bool = False,
     res["analytic_vs_raymarch"] = analytic_vs_raymarch(r, max_steps=512 if quick else 2048)
     print("0. the targets of issue 13")
     res["targets"] = targets(r, seconds, res["analytic_vs_raymarch"])
-    if before:
-        res["before"] = json.loads(Path(before).read_text())
+    if earlier:
+        res["before"] = earlier
     if only_targets:
         Path(out_dir).mkdir(parents=True, exist_ok=True)
         Path(out_dir, "bench.json").write_text(json.dumps(res, indent=1))

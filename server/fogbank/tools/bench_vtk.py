@@ -39,7 +39,8 @@ def scene_triangles(name: str = "countryside") -> tuple[np.ndarray, np.ndarray, 
     m = meshes.build(name)
     pos = [m.terrain_vertices[:, :3]]
     nrm = [m.terrain_vertices[:, 3:6]]
-    tris = [m.terrain_indices[:m.full_detail].reshape(-1, 3).astype(np.int64)]
+    full = getattr(m, "full_detail", len(m.terrain_indices))   # the coarser levels follow it
+    tris = [m.terrain_indices[:full].reshape(-1, 3).astype(np.int64)]
     n0 = len(pos[0])
     pos.append(m.objects[:, :3])
     nrm.append(m.objects[:, 3:6])
