@@ -268,3 +268,19 @@ def test_work_a_worker_does_once_is_not_the_looks_cost():
     assert job.full and job.msaa and (job.still.width, job.still.height) == (960, 540)
     s.measured(job, 8000.0, 1.0, once=True)
     assert s.cost_ratio == 0.5
+
+
+def test_a_reduced_refinement_says_so():
+    """The refinement of a look past the budget is the final frame but not the look's full
+    quality: its job is marked reduced (the frame's FLAG_REDUCED, the page's "reduced");
+    the default look's is not."""
+    s = Session("a", now=0.0)
+    s.apply(msg('{"type": "view", "width": 960, "height": 540}'), 0.0)
+    s.cost_ratio = 0.5
+    job = s.start_frame(1.0)
+    assert job.full and not job.reduced
+    layers = ",".join(['{"kind": "noise", "mode": "volume", "samples": 128}'] * 16)
+    s.apply(msg('{"type": "params", "params": {"layers": [%s]}}' % layers), 2.0)
+    s.frame_done(job, sent=False)
+    job = s.start_frame(2.0 + 2 * INPUT_SETTLE_S)
+    assert job.full and job.reduced

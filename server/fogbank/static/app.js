@@ -533,6 +533,7 @@ setInterval(() => {
   $("stat-latency").textContent = live && stream.latency != null ? `${Math.round(stream.latency)} ms` : "–";
   $("stat-size").textContent = live && stream.lastFrame ? `${(stream.lastFrame.bytes / 1024).toFixed(0)} KB` : "–";
   $("stat-refining").hidden = !(live && stream.lastFrame && !stream.lastFrame.full);
+  $("stat-reduced").hidden = !(live && stream.lastFrame && stream.lastFrame.full && stream.lastFrame.reduced);
 }, 250);
 
 if (innerWidth < 900) {   // phones and narrow windows start with the view, not the panel

@@ -17,7 +17,8 @@ export function parseHeader(buf) {
     frame: v.getUint32(4, true), version: v.getUint32(8, true), time: v.getFloat64(12, true),
     renderMs: v.getFloat32(20, true), encodeMs: v.getFloat32(24, true),
     width: v.getUint16(28, true), height: v.getUint16(30, true), quality: v.getUint8(32),
-    full: (v.getUint8(33) & 1) !== 0, playing: (v.getUint8(33) & 2) !== 0, fogScale: v.getUint8(34),
+    full: (v.getUint8(33) & 1) !== 0, playing: (v.getUint8(33) & 2) !== 0,
+    reduced: (v.getUint8(33) & 4) !== 0, fogScale: v.getUint8(34),
   };
 }
 

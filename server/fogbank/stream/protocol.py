@@ -39,6 +39,7 @@ HEADER = struct.Struct("<4sIIdffHHBBBB")
 MAGIC = b"FBK1"
 FLAG_FULL = 1
 FLAG_PLAYING = 2
+FLAG_REDUCED = 4   # a full (final) frame drawn below the look's quality: it costs past the budget
 
 
 class _Msg(BaseModel):

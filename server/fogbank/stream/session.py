@@ -83,6 +83,7 @@ class FrameJob:
     scale: float = 1.0     # a preview's share of the view's side
     rung: int = 0          # its rung of PREVIEW_RUNGS
     estimate_ms: float = 0.0   # its estimated render time (workers/cost.py, uncalibrated)
+    reduced: bool = False  # a refinement below the look's quality (Session._refinement)
 
 
 class Session:
@@ -315,7 +316,7 @@ class Session:
         preview = self.previewing(now)
         v = self.view
         fog = self.fog
-        msaa = True
+        msaa, reduced = True, False
         if preview:   # cheaper while dragging: coarser fog, no MSAA, lower JPEG quality, the ladder
             if self.costed[0] != self.version:
                 self._recost(fog, now)
@@ -323,6 +324,7 @@ class Session:
             estimate_ms = self._estimate_ms(still)
         else:
             still, msaa = self._refinement(fog, now)
+            reduced = self.refine_level > 0
             estimate_ms = self._estimate_ms(still, msaa=msaa)
         self.frame += 1
         self.making += 1
@@ -334,7 +336,7 @@ class Session:
                         full=not preview, playing=self.playing, show=self.showing(), layer=v.layer,
                         scale=self.preview_scale if preview else 1.0,
                         rung=self.preview_rung if preview else 0,
-                        estimate_ms=estimate_ms)
+                        estimate_ms=estimate_ms, reduced=reduced)
 
     def showing(self) -> str:
         """What the frames show: the view's choice, or the look while it asks for the

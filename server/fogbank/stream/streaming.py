@@ -33,7 +33,7 @@ from fogbank.workers import cost
 from fogbank.service import metrics
 
 from fogbank.workers import worker
-from fogbank.stream.protocol import (FLAG_FULL, FLAG_PLAYING, MAX_MESSAGE, PROTOCOL, ProtocolError, QueryMsg,
+from fogbank.stream.protocol import (FLAG_FULL, FLAG_PLAYING, FLAG_REDUCED, MAX_MESSAGE, PROTOCOL, ProtocolError, QueryMsg,
                        frame_header, parse)
 from fogbank.stream.session import FrameJob, Session
 from fogbank.workers.supervisor import DeadlineExceeded, Slot, Supervisor, WorkerError
@@ -169,7 +169,8 @@ class Streamer:
             s.measured(job, render_ms, self.clock(), once=bool(out.get("once")))
             metrics.RENDER_MS.observe(render_ms)
             metrics.ENCODE_MS.observe(encode_ms)
-            flags = (FLAG_FULL if job.full else 0) | (FLAG_PLAYING if job.playing else 0)
+            flags = ((FLAG_FULL if job.full else 0) | (FLAG_PLAYING if job.playing else 0)
+                     | (FLAG_REDUCED if job.reduced else 0))
             header = frame_header(job.frame, job.version, job.still.time, render_ms, encode_ms,
                                   job.still.width, job.still.height, job.quality, flags,
                                   job.still.effects.fog_scale)
