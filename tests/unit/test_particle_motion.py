@@ -85,7 +85,7 @@ def test_a_particle_continued_from_its_last_step_is_the_one_integrated_from_its_
     from fogbank.kinds import particle_motion as pm
     from fogbank.kinds.particles import sample
     rng = np.random.default_rng(11)
-    for _ in range(6):
+    for _ in range(4):
         layer = sample(rng)
         layer = layer.model_copy(update={"life_max": int(rng.integers(layer.life_min, 301)),
                                          "gravity": float(rng.uniform(-9.8, 9.8))})
