@@ -302,15 +302,19 @@ class Session:
         still = StillParams.model_construct(**{**dict(fog), "time": self.sim_time(now),
                                                "width": v.width, "height": v.height})
         budget = PLAY_BUDGET_MS if self.playing else REFINE_BUDGET_MS
-        levels = [(still, True), (still, False)] + [(self._preview_still(fog, i, now), False)
-                                                    for i in range(len(PREVIEW_RUNGS))]
-        cost = [self.cost_ratio * self._estimate_ms(st, msaa=m) for st, m in levels]
-        want = next((i for i, c in enumerate(cost) if c <= budget), len(levels) - 1)
-        keep = min(self.refine_level, len(levels) - 1)
-        if (want > keep and cost[keep] <= 1.25 * budget) or (want < keep and cost[want] > 0.8 * budget):
+        n = 2 + len(PREVIEW_RUNGS)
+
+        def level(i: int) -> tuple[StillParams, bool]:   # built only when asked (every full frame)
+            return (still, i == 0) if i < 2 else (self._preview_still(fog, i - 2, now), False)
+
+        def cost(i: int) -> float:
+            return self.cost_ratio * self._estimate_ms(*level(i))
+        want = next((i for i in range(n) if cost(i) <= budget), n - 1)
+        keep = min(self.refine_level, n - 1)
+        if (want > keep and cost(keep) <= 1.25 * budget) or (want < keep and cost(want) > 0.8 * budget):
             want = keep
         self.refine_level = want
-        return levels[want]
+        return level(want)
 
     def start_frame(self, now: float) -> FrameJob:
         preview = self.previewing(now)
