@@ -1,5 +1,6 @@
 """Median milliseconds of each frame pass for presets at 1280x720 (MSAA, a new yaw each
-frame so the scene pass is drawn too), with the GL finished after every pass.
+frame so the scene pass is drawn too), with the GL finished after every pass. W, H and
+FOG_SCALE set the size and fog scale (a 720p drag's preview: W=448 H=252 FOG_SCALE=4 MSAA=0).
 
     .venv/bin/python scripts/pass_times.py default fischer-smoke
     PYTHONPATH=/path/to/other/checkout/server .venv/bin/python scripts/pass_times.py default
@@ -14,6 +15,8 @@ import numpy as np
 import os
 
 MSAA = os.environ.get("MSAA", "1") == "1"
+W, H = int(os.environ.get("W", "1280")), int(os.environ.get("H", "720"))
+FOG_SCALE = os.environ.get("FOG_SCALE")
 
 
 def main(names: list[str], frames: int = int(os.environ.get("FRAMES", "6"))) -> None:
@@ -23,7 +26,10 @@ def main(names: list[str], frames: int = int(os.environ.get("FRAMES", "6"))) -> 
     from fogbank.render.renderer import Renderer, create_context
     r = Renderer(create_context("egl"))
     for name in names:
-        s = StillParams.model_validate({**preset_dict(name), "width": 1280, "height": 720})
+        d = {**preset_dict(name), "width": W, "height": H}
+        if FOG_SCALE:
+            d["effects"] = {**d.get("effects", {}), "fog_scale": int(FOG_SCALE)}
+        s = StillParams.model_validate(d)
         r.render(s)   # warm: programs, meshes, targets
         times: dict[str, list[float]] = {}
         for i in range(frames):

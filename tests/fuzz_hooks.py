@@ -4,8 +4,10 @@ Positive data acceptance holds the server to: every request valid by the OpenAPI
 document and by the rules its descriptions state (openapi.RULES) is accepted. Those rules
 are re-implemented here, independently of the server's validators (a grid check of
 P(u) >= 0 rather than the server's root finding), and generated positive cases that break
-them are left out. Frame sizes are clamped to 256 px a side (still within the schema) so
-that the run renders many looks in little time; the cost budget is tested elsewhere."""
+them are left out. Frame sizes are clamped to 256 px a side (still within the schema), and
+a still that leaves its size out gets 256x144 instead of the default 1280x720, so that the
+run renders many looks in little time; the cost budget and the default size are tested
+elsewhere."""
 
 from __future__ import annotations
 
@@ -97,6 +99,11 @@ def filter_case(ctx, case) -> bool:
 def map_case(ctx, case):
     if not _positive(case):   # negative data keeps its out-of-schema sizes
         return case
+    if case.operation.path.startswith("/api/still"):
+        for holder in (case.query, case.body):
+            if isinstance(holder, dict):
+                holder.setdefault("width", MAX_SIDE)
+                holder.setdefault("height", MAX_SIDE * 9 // 16)
     for holder in (case.query, case.body):
         if isinstance(holder, dict):
             for k, at in (("width", "x"), ("height", "y")):

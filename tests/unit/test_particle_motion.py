@@ -101,19 +101,19 @@ def test_a_particle_continued_from_its_last_step_is_the_one_integrated_from_its_
 
 
 def test_a_frame_later_takes_a_step_or_two_not_the_whole_lives():
-    """Counted, not timed: the steps integrated (uniform draws of jitter) for a frame 1/30 s
+    """Counted, not timed: the steps integrated (hash chains of jitter) for a frame 1/30 s
     after the last, with the cache, against from birth."""
     from fogbank.kinds import particle_motion as pm
     layer = Particles(count=64, life_min=500, life_max=1000, step=0.05, seed=3)
     calls = {"n": 0}
-    real = pm.uniform
+    real = pm._chain
 
-    def counting(seed, *keys):
+    def counting(h, *keys):
         calls["n"] += 1
-        return real(seed, *keys)
+        return real(h, *keys)
     cache = pm.Trajectories()
     simulate(layer, 100.0, WIND, terrain.height, cache=cache)
-    pm.uniform = counting
+    pm._chain = counting
     try:
         simulate(layer, 100.0 + 1 / 30, WIND, terrain.height, cache=cache)
         continued = calls["n"]
@@ -121,7 +121,8 @@ def test_a_frame_later_takes_a_step_or_two_not_the_whole_lives():
         simulate(layer, 100.0 + 1 / 30, WIND, terrain.height, cache=None)
         from_birth = calls["n"]
     finally:
-        pm.uniform = real
-    # per call: 6 draws at birth (life, cone, box) and 3 per step integrated
-    assert continued <= 6 + 3 * 2
-    assert from_birth >= 6 + 3 * 500
+        pm._chain = real
+    # per call: 6 draws at birth (life, cone, box), the particles' own chain, and one
+    # chain (three draws) per step integrated
+    assert continued <= 7 + 2
+    assert from_birth >= 7 + 500

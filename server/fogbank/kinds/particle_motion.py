@@ -31,14 +31,28 @@ def _splitmix(x: np.ndarray) -> np.ndarray:
         return x ^ (x >> np.uint64(31))
 
 
-def uniform(seed: int, *keys) -> np.ndarray:
-    """Uniform [0, 1) numbers from a hash of the seed and integer keys (broadcast)."""
-    h = np.uint64(seed)
-    h = _splitmix(np.asarray(h))
+def _hash(seed: int, *keys) -> np.ndarray:
+    """The 64-bit hash chain of the seed and integer keys (broadcast): each key is mixed
+    into the hash of those before it, so a chain's common start can be hashed once."""
+    h = _splitmix(np.asarray(np.uint64(seed)))
+    return _chain(h, *keys)
+
+
+def _chain(h: np.ndarray, *keys) -> np.ndarray:
     for k in keys:
         with np.errstate(over="ignore"):
             h = _splitmix(h ^ np.asarray(k).astype(np.uint64))
+    return h
+
+
+def _unit(h: np.ndarray) -> np.ndarray:
+    """A hash as a uniform number in [0, 1): its top 53 bits."""
     return (h >> np.uint64(11)).astype(np.float64) / float(1 << 53)
+
+
+def uniform(seed: int, *keys) -> np.ndarray:
+    """Uniform [0, 1) numbers from a hash of the seed and integer keys (broadcast)."""
+    return _unit(_hash(seed, *keys))
 
 
 def _cone(axis: np.ndarray, spread_rad: float, u1, u2) -> np.ndarray:
@@ -144,10 +158,12 @@ def simulate(layer, t: float, wind: np.ndarray,
     cover = np.zeros(int(steps.max()) + 2, np.int64)
     np.add.at(cover, k0[todo], 1)
     np.add.at(cover, steps[todo] + 1, -1)
+    # each step's jitter is uniform(seed, slot, cycle, 100 + 3 k + axis): the chain's start
+    # (seed, slot, cycle) is hashed once, and the step's three keys mixed in at once
+    particle = _hash(layer.seed, slots, cycle)[:, None]
     for k in np.flatnonzero(np.cumsum(cover) > 0).tolist():
         moving = (steps >= k) & (k0 <= k)  # after this step, positions at step k+1 are needed by age >= k
-        jitter = np.stack([uniform(layer.seed, slots, cycle, 100 + 3 * k + i) for i in range(3)],
-                          axis=1) - 0.5
+        jitter = _unit(_chain(particle, 100 + 3 * k + np.arange(3))) - 0.5
         nv = v + (target - v) * min(1.0, layer.drag * dt)
         nv = nv + np.array([0.0, layer.gravity * dt, 0.0]) + jitter * (0.3 * layer.speed + 0.2) * dt
         npos = p + nv * dt
