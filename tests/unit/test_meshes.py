@@ -77,3 +77,12 @@ def test_every_level_of_detail_tiles_each_chunk_and_keeps_its_full_border():
             assert float(np.abs(areas).sum()) == pytest.approx(float(square), rel=1e-6)
             assert _border_edges(coarse) == outline
             assert c < count / 2.5
+
+
+def test_the_indexed_objects_are_their_triangles_with_each_vertex_once():
+    tris = meshes.build("countryside").objects
+    verts, idx = meshes.indexed(tris)
+    assert idx.dtype == np.uint32
+    assert np.array_equal(verts[idx], tris)   # every corner, in order, exactly
+    assert len(np.unique(verts, axis=0)) == len(verts)
+    assert len(verts) < 0.5 * len(tris)       # shared corners are shaded once

@@ -53,9 +53,10 @@ class Meshes:
                 bake = self.ctx.vertex_array(bake_prog, [(vbo, "3f 3f 16x", "aPos", "aNormal")], ibo, 4)
                 shadow.append((self.ctx.vertex_array(shadow_prog, [(vbo, "3f 28x", "aPos")], ibo, 4),
                                m.full_detail))
-            vbo = self.ctx.buffer(m.objects.tobytes())
-            objects = self.ctx.vertex_array(objects_prog, [(vbo, *fmt)])
-            shadow.append((self.ctx.vertex_array(shadow_prog, [(vbo, "3f 28x", "aPos")]), -1))
+            verts, idx = meshes.indexed(m.objects)
+            vbo, ibo = self.ctx.buffer(verts.tobytes()), self.ctx.buffer(idx.tobytes())
+            objects = self.ctx.vertex_array(objects_prog, [(vbo, *fmt)], ibo, 4)
+            shadow.append((self.ctx.vertex_array(shadow_prog, [(vbo, "3f 28x", "aPos")], ibo, 4), -1))
             self._meshes[name] = SceneMesh(terrain, bake, objects, shadow, m.bounds, m.terrain_chunks,
                                            m.terrain_far, m.full_detail)
         return self._meshes[name]
