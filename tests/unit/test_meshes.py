@@ -86,3 +86,38 @@ def test_the_indexed_objects_are_their_triangles_with_each_vertex_once():
     assert np.array_equal(verts[idx], tris)   # every corner, in order, exactly
     assert len(np.unique(verts, axis=0)) == len(verts)
     assert len(verts) < 0.5 * len(tris)       # shared corners are shaded once
+
+
+def _plane_height_at(verts: np.ndarray, tri: np.ndarray, x: float, z: float) -> float:
+    """The height at (x, z) of the triangle that covers it, found by trying every one
+    (world coordinates, float64)."""
+    p = verts[tri.reshape(-1, 3)].astype(np.float64)
+    a, b, c = p[:, 0], p[:, 1], p[:, 2]
+    d = (b[:, 0] - a[:, 0]) * (c[:, 2] - a[:, 2]) - (c[:, 0] - a[:, 0]) * (b[:, 2] - a[:, 2])
+    u = ((x - a[:, 0]) * (c[:, 2] - a[:, 2]) - (c[:, 0] - a[:, 0]) * (z - a[:, 2])) / d
+    v = ((b[:, 0] - a[:, 0]) * (z - a[:, 2]) - (x - a[:, 0]) * (b[:, 2] - a[:, 2])) / d
+    k = int(np.argmax(np.minimum(np.minimum(u, v), 1.0 - u - v)))   # the most inside
+    return float(a[k, 1] + u[k] * (b[k, 1] - a[k, 1]) + v[k] * (c[k, 1] - a[k, 1]))
+
+
+def test_each_level_of_details_error_is_the_largest_height_gap_at_a_grid_vertex():
+    """meshes.lod_errors (solved in grid units) against a search in world coordinates: at
+    every grid vertex of a chunk, the height of the coarse triangle over it."""
+    m = meshes.build("countryside")
+    verts, n = m.terrain_vertices, meshes.TERRAIN_CELLS
+    table = m.terrain_chunks.astype(int)
+    ranges = meshes._chunk_ranges(n)
+    assert m.terrain_lod_error.shape == (len(table), len(meshes.LOD_STRIDES))
+    assert np.all(m.terrain_lod_error[:, 0] == 0.0)
+    for k in (0, 27, 36):   # a corner; the river and the road; the river south of the road
+        i0, i1, j0, j1 = ranges[k]
+        I, J = np.meshgrid(np.arange(i0, i1 + 1), np.arange(j0, j1 + 1), indexing="xy")
+        grid = (J * n + I).ravel()
+        for level in (1, 2):
+            f, c = table[k, 4 + 2 * level], table[k, 5 + 2 * level]
+            coarse = m.terrain_indices[f:f + c]
+            gap = max(abs(_plane_height_at(verts, coarse, float(verts[g, 0]), float(verts[g, 2]))
+                          - float(verts[g, 1])) for g in grid)
+            assert m.terrain_lod_error[k, level] == pytest.approx(gap, abs=1e-5)
+    # where the ground is smooth, the coarse levels are close; across the river, not
+    assert m.terrain_lod_error[0, 2] < 0.1 and m.terrain_lod_error[27, 2] > 0.3

@@ -28,6 +28,7 @@ class SceneMesh:
     chunks: np.ndarray                         # the terrain grid's chunks (scene/meshes.py)
     far: tuple[int, int]                       # first index and count of the far land
     full_detail: int = 0                       # terrain indices at full detail (shadow, lightmap)
+    lod_error: np.ndarray | None = None        # each chunk's vertical error (m) at each level
 
 
 class Meshes:
@@ -58,7 +59,7 @@ class Meshes:
             objects = self.ctx.vertex_array(objects_prog, [(vbo, *fmt)], ibo, 4)
             shadow.append((self.ctx.vertex_array(shadow_prog, [(vbo, "3f 28x", "aPos")], ibo, 4), -1))
             self._meshes[name] = SceneMesh(terrain, bake, objects, shadow, m.bounds, m.terrain_chunks,
-                                           m.terrain_far, m.full_detail)
+                                           m.terrain_far, m.full_detail, m.terrain_lod_error)
         return self._meshes[name]
 
 

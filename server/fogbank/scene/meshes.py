@@ -34,6 +34,8 @@ class Mesh:
     objects: np.ndarray            # (K, 10) float32, plain triangles
     bounds: tuple[np.ndarray, float]  # centre and half-size, for the shadow map
     terrain_far: tuple[int, int] = (0, 0)   # first index and count of the far land (the skirt)
+    terrain_lod_error: np.ndarray | None = None   # (K, len(LOD_STRIDES)) m: each chunk's
+                                   # vertical error at each level of detail (lod_errors)
 
     @property
     def full_detail(self) -> int:
@@ -226,6 +228,32 @@ def _terrain_lods(n: int, first: int) -> np.ndarray:
     return np.concatenate(idx).astype(np.uint32), np.array(table, dtype=np.float64)
 
 
+def lod_errors(verts: np.ndarray, indices: np.ndarray, n: int = TERRAIN_CELLS) -> float:
+    """The vertical error (m) of grid triangles against the full-detail grid: the largest
+    |height of the triangles - height of the grid vertex| over the grid vertices they
+    cover. Each triangle's corners are grid vertices, so it is solved in grid units (i, j):
+    every grid point of its bounding window, by barycentric coordinates (exact in float64
+    for integer points; 1e-9 keeps its edges inside), inside it or not."""
+    tri = indices.reshape(-1, 3).astype(np.int64)
+    if len(tri) == 0:
+        return 0.0
+    h = verts[:, 1].astype(np.float64)
+    I, J = tri % n, tri // n
+    i0, j0 = I.min(1, keepdims=True), J.min(1, keepdims=True)
+    side = int(max((I.max(1, keepdims=True) - i0).max(), (J.max(1, keepdims=True) - j0).max())) + 1
+    a, b = (g.ravel()[None] for g in np.meshgrid(np.arange(side), np.arange(side), indexing="xy"))
+    pi, pj = np.minimum(i0 + a, n - 1), np.minimum(j0 + b, n - 1)
+    x1, y1 = I[:, 1:2] - I[:, 0:1], J[:, 1:2] - J[:, 0:1]
+    x2, y2 = I[:, 2:3] - I[:, 0:1], J[:, 2:3] - J[:, 0:1]
+    px, py = pi - I[:, 0:1], pj - J[:, 0:1]
+    det = (x1 * y2 - x2 * y1).astype(np.float64)   # never 0: no triangle is degenerate
+    u, v = (px * y2 - x2 * py) / det, (x1 * py - px * y1) / det
+    inside = (u >= -1e-9) & (v >= -1e-9) & (u + v <= 1.0 + 1e-9)
+    H = h[tri]
+    plane = H[:, 0:1] + u * (H[:, 1:2] - H[:, 0:1]) + v * (H[:, 2:3] - H[:, 0:1])
+    return float(np.where(inside, np.abs(plane - h[pj * n + pi]), 0.0).max())
+
+
 def _house() -> list[np.ndarray]:
     hx, hz = HOUSE
     w, dpt, wall_h = 5.0, 3.6, 4.2
@@ -380,13 +408,15 @@ def build(name: str) -> Mesh:
     lod, table = _terrain_lods(TERRAIN_CELLS, len(ti))
     ti = np.concatenate([ti, lod])
     tc = np.concatenate([tc, table], axis=1)
+    err = np.array([[0.0] + [lod_errors(tv, ti[f:f + c]) for f, c in row.reshape(-1, 2).astype(int)]
+                    for row in table])
     tv = np.concatenate([tv, skirt])
     E = terrain.EXTENT
     F = SKIRT_OUTER
     water = _quad((-F, terrain.WATER_LEVEL, F), (F, terrain.WATER_LEVEL, F),
                   (F, terrain.WATER_LEVEL, -F), (-F, terrain.WATER_LEVEL, -F), _rgb("#0e2a30"), 2.0)
     objects = np.concatenate([water] + _house() + _bridge() + _trees())
-    return Mesh(tv, ti, tc, objects, (np.array([0.0, 5.0, 0.0]), E * 1.05), far)
+    return Mesh(tv, ti, tc, objects, (np.array([0.0, 5.0, 0.0]), E * 1.05), far, err)
 
 
 # The calibration scene: unlit, so a pixel's scene colour equals its albedo exactly.

@@ -13,23 +13,26 @@ from fogbank.render.passes.base import Pass
 from fogbank.render.passes.sky import scene_target, sun_color
 from fogbank.render.resources import SHADOW_SIZE
 from fogbank.scene import camera as cam
-from fogbank.scene import meshes, terrain
 
 
-# A terrain chunk is drawn coarser (meshes.LOD_STRIDES) where even its coarser cells would
-# be at most this many pixels across on screen, at its nearest point: the far terrain's
-# grid cells, a few pixels each, cost vertex and triangle work for no detail.
-LOD_CELL_PX = 12.0
+# A terrain chunk is drawn at the coarsest level of detail (meshes.LOD_STRIDES) whose
+# vertical error (meshes.lod_errors) is at most this many pixels on screen at the chunk's
+# nearest point (de Boer 2000, "Fast terrain rendering using geometrical mipmapping": the
+# screen-space error). Only heights are coarser: a coarse triangle's points keep their
+# exact x and z, so the ground's albedo and sun visibility (functions of x, z) are the
+# same; silhouettes and distances move by at most a pixel. On llvmpipe a triangle of a few
+# pixels costs its whole 4x4 block, so coarser far terrain is most of a frame's scene pass.
+LOD_ERROR_PX = 1.0
 
 
-def lod_levels(nearest: np.ndarray, fov: float, height: int) -> np.ndarray:
+def lod_levels(nearest: np.ndarray, error: np.ndarray, fov: float, height: int) -> np.ndarray:
     """Each chunk's level of detail (index into LOD_STRIDES) from the distance (m) of its
-    nearest point: the coarsest whose cells span at most LOD_CELL_PX pixels there."""
-    cell = 2.0 * terrain.EXTENT / (meshes.TERRAIN_CELLS - 1)                 # m
+    nearest point and its vertical error (m) at each level, (chunks, levels): the coarsest
+    whose error spans at most LOD_ERROR_PX pixels there."""
     px_per_m = height / (2.0 * np.tan(np.radians(fov) / 2.0) * np.maximum(nearest, 1e-3))
     level = np.zeros(len(nearest), dtype=int)
-    for k, stride in enumerate(meshes.LOD_STRIDES[1:], start=1):
-        level[cell * stride * px_per_m <= LOD_CELL_PX] = k
+    for k in range(1, error.shape[1]):
+        level[error[:, k] * px_per_m <= LOD_ERROR_PX] = k
     return level
 
 
@@ -58,9 +61,10 @@ class ScenePass(Pass):
             set_uniforms(r.terrain_prog, {**common, "uLightmapRect": r.shadow.lightmap_rect})
             r.shadow.lightmap.use(TEX["uLightmap"])
             chunks = mesh.chunks
-            seen = chunks[cam.spheres_in_view(view.view_proj, chunks[:, 2:5], chunks[:, 5])]
+            keep = cam.spheres_in_view(view.view_proj, chunks[:, 2:5], chunks[:, 5])
+            seen = chunks[keep]
             dist = np.linalg.norm(seen[:, 2:5] - view.eye, axis=1)
-            level = lod_levels(dist - seen[:, 5], look.camera.fov, look.height)
+            level = lod_levels(dist - seen[:, 5], mesh.lod_error[keep], look.camera.fov, look.height)
             for k in np.argsort(dist):
                 first, count = seen[k, [0, 1]] if level[k] == 0 else seen[k, [4 + 2 * level[k], 5 + 2 * level[k]]]
                 mesh.terrain.render(moderngl.TRIANGLES, vertices=int(count), first=int(first))
