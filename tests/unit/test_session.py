@@ -93,13 +93,13 @@ def test_a_costly_look_is_previewed_smaller_and_refined_at_full_size():
     def sized(k):
         return 2 * round(960 * k / 2), 2 * round(540 * k / 2)
 
-    # 30 ms fixed + 100 ms for the whole view's pixels: by hand, 30 + 100 k^2 <= 60 holds
-    # for k = 0.5 (55 ms) and not 0.75 (86 ms)
-    costly = lambda w: 30.0 + 100.0 * (w / 960) ** 2   # noqa: E731
+    # 15 ms fixed + 50 ms for the whole view's pixels: by hand, 15 + 50 k^2 <= 34.7 holds
+    # for k = 0.5 (27.5 ms) and not 0.75 (43.1 ms)
+    costly = lambda w: 15.0 + 50.0 * (w / 960) ** 2   # noqa: E731
     sizes = [preview(costly) for _ in range(8)]
     assert sizes[:3] == [sized(1.0), sized(0.75), sized(0.5)]
-    assert set(sizes[2:]) == {sized(0.5)}        # 55 ms: no room for a fifth more; 0.75 known over
-    assert 30 + 100 * 0.5 ** 2 <= PREVIEW_BUDGET_MS < 30 + 100 * 0.75 ** 2
+    assert set(sizes[2:]) == {sized(0.5)}        # 27.5 ms: no room for a fifth more; 0.75 known over
+    assert 15 + 50 * 0.5 ** 2 <= PREVIEW_BUDGET_MS < 15 + 50 * 0.75 ** 2
     # the look got cheap: it grows back a step at a time
     cheap = lambda w: 10.0 + 20.0 * (w / 960) ** 2   # noqa: E731
     t += 3.0   # past the time a measured cost is trusted

@@ -27,8 +27,12 @@ VIEW_WAIT_S = 0.3         # a new session waits this long for its client's view 
 PREVIEW_QUALITY = 60      # JPEG quality while the user drags
 # A preview's render budget: a look whose previews take longer is previewed smaller (a
 # costly look blurs while it is dragged instead of dropping the page's frame rate); the
-# full-quality frame after input stops is always the view's size (Session.measured).
-PREVIEW_BUDGET_MS = 60.0
+# full-quality frame after input stops is always the view's size (Session.measured). It is
+# what a frame may take for a drag to stay at PREVIEW_FPS: the frame's interval less what
+# follows the render (the JPEG, the pipe to the web process, the socket; ~7 ms measured
+# here with `fogbank bench`). At 60 ms, 720p previews were 640 px wide at 15-17 fps.
+PREVIEW_FPS = 24.0
+PREVIEW_BUDGET_MS = 1000.0 / PREVIEW_FPS - 7.0
 # The previews' ladder, sharpest first: (share of the view's side, detail). Detail below 1
 # takes that share of each volume-noise layer's samples per ray and of each particle
 # layer's particles (_detailed), the costs a smaller picture does not shrink enough. Few

@@ -546,8 +546,10 @@ def targets_markdown(res: dict) -> list[str]:
             met = "yes" if (now >= want if how == ">=" else now <= want) else "no"
         wanted = "-" if want is None else f"{how} {want:g}{'x' if unit == 'x' else ' ' + unit}"
         L.append(f"| {label} | {fmt(was, unit)} | {fmt(now, unit)} | {wanted} | {met} |")
-    L += ["", "Delivered frames while dragging are previews: the adaptive ladder sizes them to a 60 ms "
-          "budget (stream/session.py), so their width is part of the figure:", "",
+    from fogbank.stream.session import PREVIEW_BUDGET_MS, PREVIEW_FPS
+    L += ["", f"Delivered frames while dragging are previews: the adaptive ladder sizes them to a "
+          f"{PREVIEW_BUDGET_MS:.1f} ms budget ({PREVIEW_FPS:g} fps less the JPEG, pipe and socket; "
+          "stream/session.py), so their width is part of the figure:", "",
           "| stream | fps | frames px wide | server render ms |", "|---|---|---|---|"]
     for key in ("drag_1280x720", "still_1280x720", "drag_640x360"):
         g = t[key]
