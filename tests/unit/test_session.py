@@ -247,7 +247,8 @@ def test_a_look_near_the_play_budget_keeps_its_refinement_quality():
     from fogbank.workers.cost import estimate
     s = Session("a", now=0.0)
     s.apply(msg('{"type": "view", "width": 960, "height": 540}'), 0.0)
-    full = estimate(s.start_frame(1.0).still, msaa=True, compiled=True).seconds * 1000
+    # after the first frame the worker holds the scene pass: the next frames' cost
+    full = estimate(s.start_frame(1.0).still, msaa=True, compiled=True, scene_cached=True).seconds * 1000
     for ratio, msaa in ((1.1, True), (1.3, False), (1.1, False), (0.7, True)):
         s.cost_ratio = ratio * PLAY_BUDGET_MS / full
         s.making = 0
@@ -284,3 +285,35 @@ def test_a_reduced_refinement_says_so():
     s.frame_done(job, sent=False)
     job = s.start_frame(2.0 + 2 * INPUT_SETTLE_S)
     assert job.full and job.reduced
+
+
+def test_the_scene_pass_the_worker_holds_is_not_in_the_estimate():
+    """Time running or a slider dragged with the camera still: the worker redraws the fog,
+    not the scene (Renderer.begin keeps it per session and size), so the estimate that
+    calibrates and budgets the frame leaves the scene pass out; a camera move, a new size
+    or MSAA over a frame without it put it back."""
+    from fogbank.workers.cost import estimate
+    s = Session("a", now=0.0)
+    s.apply(msg('{"type": "view", "width": 960, "height": 540}'), 0.0)
+    first = s.start_frame(1.0)
+    drawn = estimate(first.still, msaa=True, compiled=True).seconds * 1000
+    assert first.msaa and first.estimate_ms == drawn
+    s.frame_done(first, sent=False)
+    again = s.start_frame(1.1)   # time runs, the camera is still
+    held = estimate(again.still, msaa=True, compiled=True, scene_cached=True).seconds * 1000
+    assert again.estimate_ms == held and held < drawn
+    s.frame_done(again, sent=False)
+    s.apply(msg('{"type": "camera", "camera": {"yaw": 40}}'), 1.2)
+    s.apply(msg('{"type": "interact", "active": true}'), 1.2)
+    moved = s.start_frame(1.2)   # a preview of a new camera: the scene is drawn
+    assert not moved.full and moved.estimate_ms == estimate(moved.still, msaa=False, compiled=True).seconds * 1000
+    s.frame_done(moved, sent=False)
+    s.apply(msg('{"type": "params", "params": {"density": 1.2}}'), 1.3)
+    slider = s.start_frame(1.3)   # the same preview size, the camera still: held
+    assert (slider.still.width, slider.still.height) == (moved.still.width, moved.still.height)
+    assert slider.estimate_ms == estimate(slider.still, msaa=False, compiled=True, scene_cached=True).seconds * 1000
+    s.frame_done(slider, sent=False)
+    s.apply(msg('{"type": "interact", "active": false}'), 1.3)
+    refine = s.start_frame(1.3 + 2 * INPUT_SETTLE_S)   # full size with MSAA: that scene was another camera's
+    assert refine.full and refine.msaa
+    assert refine.estimate_ms == estimate(refine.still, msaa=True, compiled=True).seconds * 1000

@@ -55,8 +55,11 @@ PREVIEW_FIRST_OVER = 8.0   # the default look's first preview at 960x540 is esti
 # took past the 10 s frame deadline, and every slider moved meanwhile waited for it.
 REFINE_BUDGET_MS = 2000.0
 # While time runs, every frame after input stops is a full one: the next input waits for the
-# one in flight, so those are held to this (calibrated, as above) instead.
-PLAY_BUDGET_MS = 400.0
+# one in flight, so those are held to this (calibrated, as above) instead: the first change
+# of a drag waits for it, and the issue's latency target is 250 ms. The scene pass the worker
+# holds (the camera still) is not in the estimate. Not lower: a new session's first frame,
+# not yet calibrated, would drop MSAA from the default look at 960x540 (estimated 362 ms).
+PLAY_BUDGET_MS = 300.0
 
 
 def _detailed(layer, detail: float):
@@ -114,6 +117,9 @@ class Session:
         self.cost_ratio = 1.0     # measured / estimated render time of this session's frames
         self.refine_level = 0     # the refinement's last quality (Session._refinement)
         self.costed: tuple[int, FogParams | None] = (-1, None)   # the look last costed, and its version
+        # the scene pass this session's worker holds at each frame size: (scene, camera, sun,
+        # sunlight target) and whether with MSAA (render/targets.py keeps one per slot and size)
+        self.scenes: dict[tuple[int, int], tuple[tuple, bool]] = {}
         self.fog = FogParams.model_validate(P.preset_dict("default"))
         self._base_sim = self.fog.time
         self._base_wall = now
@@ -271,12 +277,33 @@ class Session:
                                               "time": self.sim_time(now), "width": width, "height": height})
 
     @staticmethod
-    def _estimate_ms(still: StillParams, msaa: bool = False) -> float:
+    def _scene_of(still: StillParams) -> tuple:
+        return (still.scene, still.camera, still.sun, still.effects.sun_through_fog)
+
+    def _scene_cached(self, still: StillParams, msaa: bool) -> bool:
+        """Whether the worker holds this frame's scene pass: the last frame at its size drew
+        the same scene, camera and sun (a frame without MSAA reuses one with it)."""
+        drawn = self.scenes.get((still.width, still.height))
+        return drawn is not None and drawn[0] == self._scene_of(still) and (drawn[1] or not msaa)
+
+    def _drew(self, still: StillParams, msaa: bool) -> None:
+        size, key = (still.width, still.height), self._scene_of(still)
+        if not self._scene_cached(still, msaa) or msaa:
+            self.scenes.pop(size, None)
+            self.scenes[size] = (key, msaa)
+            while len(self.scenes) > 2 * len(PREVIEW_RUNGS):
+                self.scenes.pop(next(iter(self.scenes)))
+
+    def _estimate_ms(self, still: StillParams, msaa: bool = False, held: bool = True) -> float:
         """The cost model's render time of a frame (workers/cost.py), uncalibrated, without
         what a worker does once (compiling a fog program, baking a noise tile): those are
-        not this look's cost per frame."""
+        not this look's cost per frame; nor the scene pass while the worker holds it (a
+        slider dragged, or time running, with the camera still: a playing look's full frame
+        at 720p is a third of one with its scene drawn); `held` False: the look's own cost,
+        the scene drawn (two looks compared are compared alike)."""
         from fogbank.workers.cost import estimate
-        return estimate(still, msaa=msaa, compiled=True, baked=True).seconds * 1000.0
+        return estimate(still, msaa=msaa, compiled=True, baked=True,
+                        scene_cached=held and self._scene_cached(still, msaa)).seconds * 1000.0
 
     def _recost(self, fog: FogParams, now: float) -> None:
         """On a new look whose estimate at the current rung differs from the last costed
@@ -285,8 +312,9 @@ class Session:
         estimate, calibrated by this session's measurements, is within the budget (else the
         last rung), and forget the old look's measurements."""
         _, old = self.costed
-        est = self._estimate_ms(self._preview_still(fog, self.preview_rung, now))
-        last = self._estimate_ms(self._preview_still(old, self.preview_rung, now)) if old is not None else None
+        est = self._estimate_ms(self._preview_still(fog, self.preview_rung, now), held=False)
+        last = (self._estimate_ms(self._preview_still(old, self.preview_rung, now), held=False)
+                if old is not None else None)
         if (max(est / last, last / est) > PREVIEW_RECOST if last is not None
                 else self.cost_ratio * est > PREVIEW_FIRST_OVER * PREVIEW_BUDGET_MS):
             self.preview_costs.clear()
@@ -334,6 +362,7 @@ class Session:
             still, msaa = self._refinement(fog, now)
             reduced = self.refine_level > 0
             estimate_ms = self._estimate_ms(still, msaa=msaa)
+        self._drew(still, not preview and msaa)
         self.frame += 1
         self.making += 1
         self.last_start = now

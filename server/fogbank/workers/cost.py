@@ -75,19 +75,19 @@ def jit_seconds(variant: tuple) -> float:
 
 
 def estimate(still: StillParams, msaa: bool = True, fmt: str = "jpg", scale: float = 1.0,
-             compiled: bool = False, baked: bool = False) -> Cost:
+             compiled: bool = False, baked: bool = False, scene_cached: bool = False) -> Cost:
     """Seconds and memory to render and encode `still` (`scale` multiplies seconds); the
     fog program's first-draw compile is included unless `compiled`, the noise tile's bake
     unless `baked` (both once per worker: a stream's frame-to-frame estimates leave them
-    out)."""
+    out), and the scene pass unless `scene_cached` (a stream's worker keeps it while the
+    camera, scene and sun stay: render/renderer.py Renderer.begin)."""
     px = still.width * still.height
     mpx = px / 1e6
     e = still.effects
     fog_mpx = mpx / (e.fog_scale ** 2)
-    parts: dict[str, float] = {
-        "width*height (scene pass)": SCENE_FIXED_S + (SCENE_S_PER_MPX if msaa else SCENE_PREVIEW_S_PER_MPX) * mpx,
-        "width*height (composite, encode)": (COMPOSITE_S_PER_MPX + ENCODE_S_PER_MPX.get(fmt, 0.08)) * mpx,
-    }
+    parts: dict[str, float] = {} if scene_cached else {
+        "width*height (scene pass)": SCENE_FIXED_S + (SCENE_S_PER_MPX if msaa else SCENE_PREVIEW_S_PER_MPX) * mpx}
+    parts["width*height (composite, encode)"] = (COMPOSITE_S_PER_MPX + ENCODE_S_PER_MPX.get(fmt, 0.08)) * mpx
     if e.blur != "off":
         parts["effects.blur"] = BLUR_S_PER_MPX * mpx
     for i, layer in enumerate(still.layers):
