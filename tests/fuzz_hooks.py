@@ -99,11 +99,11 @@ def filter_case(ctx, case) -> bool:
 def map_case(ctx, case):
     if not _positive(case):   # negative data keeps its out-of-schema sizes
         return case
-    if case.operation.path.startswith("/api/still"):
-        for holder in (case.query, case.body):
-            if isinstance(holder, dict):
-                holder.setdefault("width", MAX_SIDE)
-                holder.setdefault("height", MAX_SIDE * 9 // 16)
+    if case.operation.path.startswith("/api/still"):   # the size is in the GET's query, the POST's body
+        holder = case.query if case.operation.method.upper() == "GET" else case.body
+        if isinstance(holder, dict):
+            holder.setdefault("width", MAX_SIDE)
+            holder.setdefault("height", MAX_SIDE * 9 // 16)
     for holder in (case.query, case.body):
         if isinstance(holder, dict):
             for k, at in (("width", "x"), ("height", "y")):

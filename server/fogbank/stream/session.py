@@ -47,7 +47,10 @@ PREVIEW_COST_TTL_S = 2.0   # a rung's measured cost is trusted this long (the lo
 # made costly in one step (16 layers of volume noise) would otherwise spend seconds on
 # frames at the old size before the ladder came down.
 PREVIEW_RECOST = 1.5
-PREVIEW_FIRST_OVER = 8.0   # the default look's first preview at 960x540 is estimated at 256 ms (measured 60-110)
+# A first preview is far over the budget past this many budgets (485 ms): the default look's
+# first preview, uncalibrated, is estimated at 256 ms at 960x540 and 371 ms at 1280x720
+# (measured 20-60 ms) and starts on the sharpest rung; at 1920x1080, 699 ms, it starts lower.
+PREVIEW_FIRST_OVER = 14.0
 # The refinement after input stops is the full look unless its calibrated estimate is over
 # this: then the sharpest of (no MSAA, then the preview rungs) that fits. A refinement is one
 # frame no input can interrupt (GL draws are not cancelled), and the worker it runs on draws

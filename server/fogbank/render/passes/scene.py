@@ -20,8 +20,10 @@ from fogbank.scene import camera as cam
 # nearest point (de Boer 2000, "Fast terrain rendering using geometrical mipmapping": the
 # screen-space error). Only heights are coarser: a coarse triangle's points keep their
 # exact x and z, so the ground's albedo and sun visibility (functions of x, z) are the
-# same; silhouettes and distances move by at most a pixel. On llvmpipe a triangle of a few
-# pixels costs its whole 4x4 block, so coarser far terrain is most of a frame's scene pass.
+# same; silhouettes and distances move by about a pixel (a pixel on the view's axis: the
+# distance is the eye's, not the depth, so toward the corners of a 55 degree view up to
+# ~1.5 px). On llvmpipe a triangle of a few pixels costs its whole 4x4 block, so coarser
+# far terrain is most of a frame's scene pass.
 LOD_ERROR_PX = 1.0
 
 
