@@ -27,8 +27,8 @@ VIEW_WAIT_S = 0.3         # a new session waits this long for its client's view 
 PREVIEW_QUALITY = 60      # JPEG quality while the user drags
 # A preview's render budget: a look whose previews take longer is previewed smaller (a
 # costly look blurs while it is dragged instead of dropping the page's frame rate); the
-# full-quality frame after input stops is always the view's size (Session.measured). It is
-# what a frame may take for a drag to stay at PREVIEW_FPS: the frame's interval less what
+# frame after input stops has budgets of its own (REFINE_BUDGET_MS, PLAY_BUDGET_MS). It
+# is what a frame may take for a drag to stay at PREVIEW_FPS: the frame's interval less what
 # follows the render (the JPEG, the pipe to the web process, the socket; ~7 ms measured
 # here with `fogbank bench`). At 60 ms, 720p previews were 640 px wide at 15-17 fps.
 PREVIEW_FPS = 24.0
