@@ -30,6 +30,10 @@ def test_page_loads_and_frames_arrive(server, browser):
     with urllib.request.urlopen(server.url + "/healthz") as r:
         renderer = json.loads(r.read())["renderer"]
     assert page.locator("#stat-renderer").inner_text() == renderer
+    # "reduced" quotes the stream's budgets as the server has them (a copy in the page went stale)
+    from fogbank.stream.session import PLAY_BUDGET_MS, REFINE_BUDGET_MS
+    title = page.locator("#stat-reduced").get_attribute("title")
+    assert f"({REFINE_BUDGET_MS / 1000:g} s paused, {PLAY_BUDGET_MS / 1000:g} s while time runs)" in title
     page.wait_for_function("!document.getElementById('stat-fps').textContent.startsWith('0.0')")
     # controls come from the schema, with labels
     assert page.locator("[data-path='density']").count() == 1

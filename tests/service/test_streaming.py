@@ -11,6 +11,7 @@ import numpy as np
 from PIL import Image
 
 from fogbank.stream.protocol import HEADER
+from fogbank.stream.session import PLAY_BUDGET_MS, REFINE_BUDGET_MS
 
 VIEW = {"type": "view", "width": 96, "height": 64, "fps": 60, "quality": 80}
 
@@ -40,6 +41,7 @@ def test_frames_arrive_with_header_and_jpeg(client):
     with open_ws(client, "camera.yaw=12") as ws:
         hello = ws.receive_json()
         assert hello["type"] == "hello" and hello["renderer"]
+        assert (hello["refine_budget_ms"], hello["play_budget_ms"]) == (REFINE_BUDGET_MS, PLAY_BUDGET_MS)
         state = ws.receive_json()
         assert state["type"] == "state" and state["query"] == "v=1&camera.yaw=12"
         ws.send_json(VIEW)

@@ -162,7 +162,14 @@ new CameraInput(canvas, () => store.get().params.camera, (patch) => {
 }, setInteract);
 
 // ------------------------------------------------------------------ server messages
-stream.addEventListener("hello", (e) => { $("stat-renderer").textContent = e.detail.renderer; });
+stream.addEventListener("hello", (e) => {
+  $("stat-renderer").textContent = e.detail.renderer;
+  const { refine_budget_ms: paused, play_budget_ms: playing } = e.detail;
+  if (paused && playing) {   // the server's budgets, so that the page never quotes stale ones
+    $("stat-reduced").title = `this look costs more a frame than the stream allows (${paused / 1000} s paused, ` +
+      `${playing / 1000} s while time runs): the stream shows it reduced; Download gives the full quality`;
+  }
+});
 stream.addEventListener("state", (e) => {
   const { type, ...confirmed } = e.detail;
   store.update((s) => {

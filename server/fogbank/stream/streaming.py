@@ -35,7 +35,7 @@ from fogbank.service import metrics
 from fogbank.workers import worker
 from fogbank.stream.protocol import (FLAG_FULL, FLAG_PLAYING, FLAG_REDUCED, MAX_MESSAGE, PROTOCOL, ProtocolError, QueryMsg,
                        frame_header, parse)
-from fogbank.stream.session import FrameJob, Session
+from fogbank.stream.session import PLAY_BUDGET_MS, REFINE_BUDGET_MS, FrameJob, Session
 from fogbank.workers.supervisor import DeadlineExceeded, Slot, Supervisor, WorkerError
 
 log = logging.getLogger("fogbank.stream")
@@ -288,7 +288,9 @@ async def websocket_endpoint(ws: WebSocket, streamer: Streamer, renderer_info: d
         initial = session.apply(QueryMsg(type="query", query=query), now) if query else [session.state(now)]
         await client.send_json({"type": "hello", "protocol": PROTOCOL, "session": session.id,
                                 "renderer": renderer_info.get("renderer"),
-                                "max_message": MAX_MESSAGE})
+                                "max_message": MAX_MESSAGE,
+                                # what a final frame may cost before it is reduced (the page says so)
+                                "refine_budget_ms": REFINE_BUDGET_MS, "play_budget_ms": PLAY_BUDGET_MS})
         for out in initial:
             await client.send_json(out)
     except Exception:
