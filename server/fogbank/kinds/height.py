@@ -75,6 +75,6 @@ KIND = Kind(
     code=exponential("heightOpticalDepth(Os, w, ds, {log_density}, {falloff})"),
     density_code=lambda r, v: r.format("rho += heightDensity(x, {log_density}, {falloff});"),
     sample=sample, optical_depth=optical_depth, density=density, seconds_per_mpx=0.03,
-    cpu_only=frozenset({"wind"}),   # the wind is horizontal; the density depends on y alone,
+    cpu_only=frozenset({"wind"}),   # the wind is horizontal; the density depends on y alone
     loop=False,   # tiny code: inlined (kinds/kind.py Kind.loop)
 )

@@ -37,6 +37,6 @@ KIND = Kind(
     density_code=lambda r, v: r.format("rho += homogeneousDensity({density});"),
     sample=lambda rng: Homogeneous(density=rng.uniform(0, 0.05), wind=bool(rng.random() < 0.5)),
     optical_depth=optical_depth, density=density, seconds_per_mpx=0.03,
-    cpu_only=frozenset({"wind"}),   # a constant density is the same slid by any wind,
+    cpu_only=frozenset({"wind"}),   # a constant density is the same slid by any wind
     loop=False,   # tiny code: inlined (kinds/kind.py Kind.loop)
 )
