@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Annotated, Literal
 
 import numpy as np
-from pydantic import ConfigDict, Field, model_validator
+from pydantic import ConfigDict, Field, PrivateAttr, model_validator
 
 from fogbank.kinds.kind import Kind, Layout
 from fogbank.model.fields import MAX_PARTICLES, Direction, Int, LayerBase, Position, num
@@ -37,12 +37,30 @@ class Particles(LayerBase):
     gravity: float = num(0.0, -20, 20, 0.1, "m/s^2", "upward acceleration (negative falls)")
     drag: float = num(0.5, 0, 10, 0.05, "1/s", "relaxation of velocity toward the wind")
     seed: Int = Field(1, ge=0, le=2**31 - 1, description="random seed")
+    # Drawn: every `_stride`-th particle alive, each that much more opaque (a stream's
+    # preview, stream/session.py _detailed). Not a field: the simulation, its caches and the
+    # URL see the whole layer, so a preview's swarm is the full one's, thinned, and changing
+    # the preview's detail simulates nothing again (a new count was a new swarm, integrated
+    # from its birth: ~200 ms for particles of life 1000).
+    _stride: int = PrivateAttr(1)
 
     @model_validator(mode="after")
     def _life(self) -> "Particles":
         if self.life_min > self.life_max:
             raise ValueError(f"life_min = {self.life_min} must be <= life_max = {self.life_max}")
         return self
+
+    def thinned(self, stride: int) -> "Particles":
+        """This layer drawn with every `stride`-th particle alive, each `stride` times as
+        opaque (at most 1): the swarm's optical depth kept, its grain coarser."""
+        out = self.model_copy()
+        out._stride = max(1, int(stride))
+        return out
+
+    @property
+    def drawn(self) -> int:
+        """At most how many particles are drawn (count, thinned)."""
+        return -(-self.count // self._stride)
 
 
 def segment_distance(p, O, omega, d):
@@ -74,11 +92,13 @@ def pack(layer, p):
     # the particles' positions relative to E go to the particle texture, from this
     # layer's first row; the block says where they are
     pos, strength = p.states[p.index]
+    k = layer._stride
+    pos, strength = pos[::k], strength[::k]
     first, count = p.first_particle, len(pos)
     p.particles[first:first + count, :3] = pos - p.ref
     p.particles[first:first + count, 3] = strength
     p.first_particle += count
-    return {"alpha": layer.alpha, "radius": layer.radius, "first": first, "count": count}
+    return {"alpha": min(1.0, layer.alpha * k), "radius": layer.radius, "first": first, "count": count}
 
 
 def code(r, variant):
@@ -120,7 +140,7 @@ def sim_seconds(layer) -> float:
 
 def extra_seconds(layer, fog_mpx):
     cover = min(max((layer.radius / 20.0) ** 2, 0.05), 16.0)
-    return PARTICLE_S_PER_MPX * layer.count * cover * fog_mpx + sim_seconds(layer)
+    return PARTICLE_S_PER_MPX * layer.drawn * cover * fog_mpx + sim_seconds(layer)
 
 
 KIND = Kind(
