@@ -247,6 +247,7 @@ def test_a_look_near_the_play_budget_keeps_its_refinement_quality():
     from fogbank.workers.cost import estimate
     s = Session("a", now=0.0)
     s.apply(msg('{"type": "view", "width": 960, "height": 540}'), 0.0)
+    s.cost_ratio = 0.5   # as if measured: the first frame is the full look
     # after the first frame the worker holds the scene pass: the next frames' cost
     full = estimate(s.start_frame(1.0).still, msaa=True, compiled=True, scene_cached=True).seconds * 1000
     for ratio, msaa in ((1.1, True), (1.3, False), (1.1, False), (0.7, True)):
@@ -295,6 +296,7 @@ def test_the_scene_pass_the_worker_holds_is_not_in_the_estimate():
     from fogbank.workers.cost import estimate
     s = Session("a", now=0.0)
     s.apply(msg('{"type": "view", "width": 960, "height": 540}'), 0.0)
+    s.cost_ratio = 0.5   # as if measured: the first frame is the full look
     first = s.start_frame(1.0)
     drawn = estimate(first.still, msaa=True, compiled=True).seconds * 1000
     assert first.msaa and first.estimate_ms == drawn
@@ -330,3 +332,38 @@ def test_the_default_looks_first_drag_starts_sharp_up_to_720p():
         s.apply(msg('{"type": "camera", "camera": {"yaw": 5}}'), 0.1)
         job = s.start_frame(0.2)
         assert (job.rung == 0) == sharp
+
+
+def test_the_first_measurement_replaces_the_prior():
+    """Found measuring issue 13's drag: the first measured ratio was smoothed with the prior
+    (1.0), so a look the model underestimates twice over (16 layers of volume noise) had its
+    next playing frame estimated 1.4 times too low: 409 ms of a 300 ms budget, which the
+    drag's first change waited for. The first measurement now replaces the prior; later ones
+    are smoothed (half weight each)."""
+    from fogbank.workers.cost import estimate
+    s = Session("a", now=0.0)
+    s.apply(msg('{"type": "view", "width": 960, "height": 540}'), 0.0)
+    job = s.start_frame(1.0)
+    s.measured(job, 2.0 * job.estimate_ms, 1.1)
+    assert s.cost_ratio == 2.0
+    s.frame_done(job, sent=True)
+    job = s.start_frame(1.2)
+    s.measured(job, 0.5 * job.estimate_ms, 1.3)
+    assert abs(s.cost_ratio - 1.0) < 1e-9   # sqrt(2 * 0.5)
+    assert job.estimate_ms == estimate(job.still, msaa=job.msaa, compiled=True, baked=True,
+                                       scene_cached=True).seconds * 1000
+
+
+def test_a_previews_particles_are_the_looks_swarm_thinned():
+    """Found measuring issue 13's drag: a rung of less detail gave each particle layer a
+    smaller count, which is another swarm, integrated from its birth (~200 ms at life
+    1000) at every change of rung, and the drag's frames waited for it. A rung's particle
+    layer is now the look's own layer (the same simulation), every k-th particle drawn."""
+    from fogbank.stream.session import PREVIEW_RUNGS
+    s = Session("a", now=0.0)
+    s.apply(msg('{"type": "view", "width": 960, "height": 540}'), 0.0)
+    s.apply(msg('{"type": "params", "params": {"layers": [{"kind": "particles", "count": 64}]}}'), 0.0)
+    for rung, (_, detail) in enumerate(PREVIEW_RUNGS):
+        layer = s._preview_still(s.fog, rung, 1.0).layers[0]
+        assert layer.model_dump_json() == s.fog.layers[0].model_dump_json()
+        assert layer.drawn == -(-64 // round(1 / detail))
