@@ -19,6 +19,7 @@ import numpy as np
 
 from fogbank.kinds import KINDS
 from fogbank.kinds.kind import LAYER_VEC4, Packing
+from fogbank.kinds.rays import velocity
 from fogbank.model.fields import MAX_LAYERS, MAX_PARTICLES
 
 DEFINES = {"MAX_LAYERS": MAX_LAYERS, "LAYER_VEC4": LAYER_VEC4}
@@ -28,6 +29,22 @@ FLT_MIN = float(np.finfo(np.float32).tiny)
 def enabled(fog) -> list[tuple[int, object]]:
     """(index in fog.layers, layer) of the enabled layers: slot n of uLayer holds the n-th."""
     return [(i, layer) for i, layer in enumerate(fog.layers) if layer.enabled]
+
+
+def changes_with_time(layer, fog) -> bool:
+    """Whether a layer's part of the fog changes with the look's time: its density slides
+    (wind-sensitive under a wind, or its own drift) or comes from a simulation (particles).
+    Every other layer's packed values are the same at every time (pack_layers)."""
+    return KINDS[layer.kind].simulate is not None or bool(velocity(layer, fog.wind.vector()).any())
+
+
+def split_by_time(fog) -> tuple:
+    """The look as two: its enabled layers that do not change with time, and the others
+    (each a copy of the look with only those layers, in their order)."""
+    layers = [layer for _, layer in enabled(fog)]
+    still = [layer for layer in layers if not changes_with_time(layer, fog)]
+    moving = [layer for layer in layers if changes_with_time(layer, fog)]
+    return fog.model_copy(update={"layers": still}), fog.model_copy(update={"layers": moving})
 
 
 def variant(fog) -> tuple:

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from fogbank.kinds import KINDS
-from fogbank.kinds.packing import Packed, direct_density, enabled, pack_layers, uses_noise, variant
+from fogbank.kinds.packing import Packed, direct_density, enabled, pack_layers, split_by_time, uses_noise, variant
 from fogbank.scene import camera as cam
 
 SIM_CACHE = 64   # particle states kept (at most 16 layers x 1024 particles each)
@@ -54,6 +54,13 @@ class FogPlan:
     has_particles: bool
     noise: tuple | None            # the baked noise tile it samples, if any
     uniforms: dict[str, Any]
+    # with a still camera: the plans of the layers that do not change with time and of the
+    # others (kinds/packing.py split_by_time), for the fog pass's two stages
+    split: tuple["FogPlan", "FogPlan"] | None = None
+
+    def signature(self) -> tuple:
+        """Everything of this plan that the fog program reads: equal signatures draw equal fog."""
+        return (self.key, self.packed.data.tobytes(), self.noise, tuple(sorted(self.uniforms.items())))
 
     def swarms(self):
         """(slot, values) of each layer drawn as quads (particles), in slot order."""
@@ -61,10 +68,13 @@ class FogPlan:
                 if KINDS[k].quads]
 
 
-def plan_fog(fog, time: float, ref, sims: Simulations) -> FogPlan:
+def plan_fog(fog, time: float, ref, sims: Simulations, split: bool = False) -> FogPlan:
+    """The fog's plan at `time`, its layers packed relative to `ref`; with `split`, also the
+    plans of its layers that do not change with time and of the others (FogPlan.split)."""
     states = {i: sims.state(l, time, fog) for i, l in enabled(fog) if KINDS[l.kind].simulate}
     e = fog.effects
     n = fog.noise
+    halves = tuple(plan_fog(part, time, ref, sims) for part in split_by_time(fog)) if split else None
     return FogPlan(
         key=variant(fog),
         packed=pack_layers(fog, states, ref, time),
@@ -73,6 +83,7 @@ def plan_fog(fog, time: float, ref, sims: Simulations) -> FogPlan:
         uniforms={"uStartDistance": e.start_distance, "uCutoffDistance": e.cutoff_distance,
                   "uCutoffFog": e.cutoff_mode == "fog",
                   "uMaxOpacity": e.max_opacity, "uDensity": direct_density(fog)},
+        split=halves,
     )
 
 
@@ -89,6 +100,9 @@ class Frame:
     plan: Future                   # FogPlan, prepared off the GL thread
     scene_key: tuple = ()
     scene_cached: bool = False
+    hold_fog: bool = False         # keep the fog's time-invariant part for the next frames (streams)
+    held_fog: Any = None           # the held fog this frame's fog was drawn over (render/targets.py HeldFog)
+    lit_filtered: bool = False     # the fog target's lit share is already filtered (a held one)
     raymarch_steps: int | None = None
     sun_view_proj: np.ndarray | None = None
     fog_tex: Any = None

@@ -11,7 +11,8 @@ from fogbank.render.glsl import ShaderError
 # texture units, fixed per sampler name across every program
 TEX = {"uColor": 0, "uInvDist": 1, "uFog": 2, "uParticles": 3, "uNoise": 4, "uShadow": 5,
        "uRays": 6, "uImage": 0, "uSunLight": 7, "uFarColor": 8, "uFarInvDist": 9, "uFarSunLight": 10,
-       "uTiles": 11, "uLightmap": 12}
+       "uTiles": 11, "uLightmap": 12, "uHeld": 13, "uHeldDirect": 14,
+       "uHeldA": 15, "uHeldB": 16, "uHeldW": 17}
 
 
 def create_context(backend: str = "auto", device: int | None = None) -> moderngl.Context:

@@ -57,15 +57,22 @@ class Programs:
         self.vaos[prog].render(mode, vertices=vertices, instances=instances)
 
     def fog(self, layers: tuple, raymarch_steps: int | None = None, sun: bool = False,
-            shafts: bool = False):
+            shafts: bool = False, stage: int = 0, held_direct: bool = False):
         """The fog pass; particles are left to the quads pass. With raymarch_steps, the
         exponential layers are raymarched instead (the benchmark's comparison); with sun,
         it also integrates each visible point's fog toward the sun; with shafts, it samples
-        the shadow map along each view ray (SHAFT_SAMPLES)."""
+        the shadow map along each view ray (SHAFT_SAMPLES). `stage` 1 and 2 split the fog of
+        a still camera in two (passes/fog.frag FOG_STAGE): 1 the sums of the layers that do
+        not change with time (and the shafts), 2 the others over them; `held_direct`: the
+        held sums include a direct transmittance's (STATIC_DIRECT)."""
         extra = {"RAYMARCH_STEPS": raymarch_steps} if raymarch_steps else {}
         if sun and not raymarch_steps:
             extra["SUN_THROUGH_FOG"] = 1
-        if shafts:
+        if shafts and stage != 2:
             extra["SHAFTS"] = SHAFT_SAMPLES
+        if stage:
+            extra["FOG_STAGE"] = stage
+        if held_direct:
+            extra["STATIC_DIRECT"] = 1
         return self.get(FULLSCREEN, "passes/fog.frag", layers, inline_particles=False,
                         **extra)

@@ -47,25 +47,28 @@ class Renderer:
 
     # ------------------------------------------------------------ frames
 
-    def begin(self, still, slot: str = "still", msaa: bool = True) -> Frame:
+    def begin(self, still, slot: str = "still", msaa: bool = True, hold_fog: bool = False) -> Frame:
         """A frame's inputs: its targets and view, and its fog plan set going on the
-        preparation thread."""
+        preparation thread. `hold_fog`: with the scene pass held (the camera still), the
+        fog's time-invariant part is kept with it for the next frames (passes/fog.py)."""
         w, h = still.width, still.height
         view = cam.view(still.camera, w, h)
         g = self.caches.gbuffer(slot, w, h, still.effects.sun_through_fog)
         key = (still.scene, still.camera, still.sun, msaa)
         # a preview happily reuses a full-quality scene pass
         cached = g.scene_key == key or (not msaa and g.scene_key == key[:3] + (True,))
-        plan = self._prep.submit(plan_fog, still, still.time, view.eye, self.sims)
+        hold = hold_fog and cached
+        plan = self._prep.submit(plan_fog, still, still.time, view.eye, self.sims, hold)
         return Frame(still=still, slot=slot, msaa=msaa, view=view,
                      targets=self.caches.targets(w, h), gbuffer=g, plan=plan,
-                     scene_key=key, scene_cached=cached)
+                     scene_key=key, scene_cached=cached, hold_fog=hold)
 
-    def render(self, still, slot: str = "still", msaa: bool = True) -> np.ndarray:
+    def render(self, still, slot: str = "still", msaa: bool = True, hold_fog: bool = False) -> np.ndarray:
         """The frame as (height, width, 3) uint8 sRGB, top row first. `slot` names whose
         scene pass is cached (a session id; stills share one); `msaa` off is the cheap
-        preview used while a user drags."""
-        frame = self.begin(still, slot, msaa)
+        preview used while a user drags; `hold_fog` keeps the fog's time-invariant part
+        while the camera stays (a stream's frames: time runs, the camera is still)."""
+        frame = self.begin(still, slot, msaa, hold_fog)
         for p in FRAME_PASSES:
             p.run(self, frame)
         self.keep_only(frame)

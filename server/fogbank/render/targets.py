@@ -21,6 +21,13 @@ LINEAR_BPP = 2 * 8                            # two RGBA16F blur targets
 GBUFFER_BPP = 8 + 4 + 4 + 8 + 4
 SUNLIGHT_BPP = 8                              # RGBA16F direct sunlight (sun_through_fog only), per sample
 FOG_BPP = 16                                  # RGBA32F (raw T, 1/distance, T toward the sun, lit share)
+# a still camera's held fog (passes/fog.py), per fog texel: RGBA32F sums (tau, 1/distance,
+# tau toward the sun, lit share), their copy with the lit share filtered (shafts), and
+# R32F tauDirect (looks with a time-invariant direct layer)
+HELD_FOG_BPP = 16
+HELD_DIRECT_BPP = 4
+# the held composite's inputs (passes/composite_inputs.frag), per pixel: three RGBA16F
+HELD_INPUTS_BPP = 3 * 8
 
 
 @dataclass
@@ -88,6 +95,49 @@ class Targets:
 
 
 @dataclass
+class HeldFog:
+    """The time-invariant part of a still camera's fog at one fog scale (passes/fog.py,
+    stage 1), kept with its scene pass: the sums, and their copy with the lit share
+    filtered where shafts sampled it; `key` is what drew them."""
+    fbo: moderngl.Framebuffer           # stage 1's targets: the sums (+ tauDirect)
+    sums: moderngl.Texture
+    direct: moderngl.Texture | None
+    filtered: tuple[moderngl.Framebuffer, moderngl.Texture] | None
+    key: object = None
+    # the held composite's inputs over this fog (passes/composite_inputs.frag): A, B, W at
+    # the frame's size, and what drew them
+    inputs: moderngl.Framebuffer | None = None
+    inputs_key: object = None
+
+    @property
+    def texture(self) -> moderngl.Texture:
+        """The sums stage 2 reads (lit share filtered, where it was sampled)."""
+        return self.filtered[1] if self.filtered else self.sums
+
+    def composite_inputs(self, ctx: moderngl.Context, size: tuple[int, int]) -> moderngl.Framebuffer:
+        if self.inputs is None:
+            texs = [ctx.texture(size, 4, dtype="f2") for _ in range(3)]
+            for t in texs:
+                t.filter = (moderngl.NEAREST, moderngl.NEAREST)
+            self.inputs = ctx.framebuffer(color_attachments=texs)
+        return self.inputs
+
+    def nbytes(self) -> int:
+        n = self.sums.width * self.sums.height
+        n *= HELD_FOG_BPP * (2 if self.filtered else 1) + (HELD_DIRECT_BPP if self.direct else 0)
+        if self.inputs is not None:
+            n += self.inputs.width * self.inputs.height * HELD_INPUTS_BPP
+        return n
+
+    def release(self) -> None:
+        release_fbo(self.fbo)
+        if self.filtered:
+            release_fbo(self.filtered[0])
+        release_fbo(self.inputs)
+        self.inputs = None
+
+
+@dataclass
 class GBuffer:
     """A cached scene pass (colour, inverse distance and, for looks with sun_through_fog,
     the direct sunlight) for one slot (a streaming session, or stills) and size; redrawn
@@ -107,6 +157,31 @@ class GBuffer:
     scene_key: object = None
     mips_key: object = None        # the scene pass whose mip pyramid the textures hold
     two_surfaces: bool = False     # the far textures hold this scene pass's far surfaces
+    held: dict[int, HeldFog] = field(default_factory=dict)   # by fog scale
+    fog_seen: dict[int, object] = field(default_factory=dict)   # the held-fog key of the last frame, by fog scale
+
+    def held_fog(self, ctx: moderngl.Context, scale: int, direct: bool, filtered: bool) -> HeldFog:
+        """The held fog's targets at `scale` with a tauDirect target (`direct`) and a
+        filtered copy (`filtered`), made anew when those differ from what it has."""
+        h = self.held.get(scale)
+        if h is not None and (h.direct is not None) == direct and (h.filtered is not None) == filtered:
+            return h
+        if h is not None:
+            h.release()
+        size = (-(-self.color.width // scale), -(-self.color.height // scale))
+
+        def tex(components: int) -> moderngl.Texture:
+            t = ctx.texture(size, components, dtype="f4")
+            t.filter = (moderngl.NEAREST, moderngl.NEAREST)
+            return t
+        sums, tau_direct = tex(4), (tex(1) if direct else None)
+        fbo = ctx.framebuffer(color_attachments=[sums] + ([tau_direct] if direct else []))
+        copy = None
+        if filtered:
+            t = tex(4)
+            copy = (ctx.framebuffer(color_attachments=[t]), t)
+        self.held[scale] = HeldFog(fbo, sums, tau_direct, copy)
+        return self.held[scale]
 
     def mipmaps(self) -> None:
         """Build the colour's (and sunlight's) mip pyramid once per scene pass drawn."""
@@ -122,13 +197,16 @@ class GBuffer:
         n = self.color.width * self.color.height * (GBUFFER_BPP + (2 * SUNLIGHT_BPP if self.sunlight else 0))
         if self.mips_key is not None:   # the colour's (and sunlight's) mip pyramid: a third more
             n += self.color.width * self.color.height * (8 + (SUNLIGHT_BPP if self.sunlight else 0)) // 3
-        return n
+        return n + sum(h.nbytes() for h in self.held.values())
 
     @property
     def tiles(self) -> moderngl.Texture:
         return self.tiles_fbo.color_attachments[0]
 
     def release(self) -> None:
+        for h in self.held.values():
+            h.release()
+        self.held.clear()
         release_fbo(self.tiles_fbo)
         self.resolve_fbo.release()   # its attachments are the near textures (released with fbo) and the far ones
         for tex in (self.far_color, self.far_invdist, self.far_sunlight):

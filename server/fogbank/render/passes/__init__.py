@@ -5,10 +5,12 @@ frame's inputs are the look, the view and the fog plan (render/frame.py).
     scene      meshes, shadow_map, view      -> scene_target (cleared)
     sky        look.sun, view, scene_target  -> scene_target (where no surface is)
     resolve    scene_target                  -> gbuffer (near and far surface per pixel)
-    fog        gbuffer.invdist, fog_plan     -> fog
+    fog        gbuffer.invdist, fog_plan     -> fog (and gbuffer.held: a still camera's
+                                                time-invariant fog, drawn once)
     fog_filter fog, fog_plan                 -> fog (3x3, jittered looks only)
     particles  gbuffer.invdist, fog_plan     -> fog (clarity multiplied in)
-    composite  gbuffer, fog                  -> out (or linear, blur separate)
+    composite  gbuffer, fog                  -> out (or linear, blur separate; over a held
+                                                fog, from inputs held with it)
     blur       linear                        -> out
     output     out                           -> image
 """

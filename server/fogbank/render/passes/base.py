@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
-# what a frame brings before any pass runs
-FRAME_INPUTS = frozenset({"look", "look.sun", "view", "meshes", "fog_plan"})
+# what a frame brings before any pass runs; gbuffer.held is what earlier frames of its slot
+# left with the scene pass (a still camera's held fog and composite inputs, passes/fog.py)
+FRAME_INPUTS = frozenset({"look", "look.sun", "view", "meshes", "fog_plan", "gbuffer.held"})
 
 
 class Pass:

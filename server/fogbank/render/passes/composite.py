@@ -16,6 +16,7 @@ from fogbank.render.programs import FULLSCREEN
 from fogbank.render.targets import SILHOUETTE_TILE
 
 BLUR_MODES = {"off": 0, "single": 1, "separate": 2}
+HELD_UNIFORMS = ("uFogColor", "uScatterColor", "uMaxOpacity")
 
 
 def blur_sigma(f) -> float:
@@ -23,20 +24,37 @@ def blur_sigma(f) -> float:
     return f.still.effects.blur_radius * f.still.height / 720.0
 
 
+def held_inputs_key(f) -> tuple:
+    """What the held composite's inputs depend on besides the held fog (and the scene pass
+    it was drawn over): the in-scattering lobe's effects and the sky's share of fog."""
+    e = f.still.effects
+    return (f.held_fog.key, e.phase, e.anisotropy, e.scatter_exponent, e.scatter_start, e.shafts, e.sky_affect)
+
+
 class CompositePass(Pass):
+    """The composite of every pixel's near surface, then, over the tiles that hold one, of
+    the pixels with two (passes/resolve.frag, passes/tiles.vert). A stream frame whose fog
+    was drawn over a held fog (the camera still, passes/fog.py) takes the held composite
+    for the near surfaces (unless the blur is fused): what depends on the scene and the
+    held fog alone is drawn once (passes/composite_inputs.frag), and each frame blends the
+    fog's moving texels (passes/composite_held.frag)."""
     name = "composite"
-    reads = ("gbuffer.color", "gbuffer.invdist", "gbuffer.sunlight", "gbuffer.far", "gbuffer.tiles", "fog", "view")
-    writes = ("out", "linear")
+    reads = ("gbuffer.color", "gbuffer.invdist", "gbuffer.sunlight", "gbuffer.far", "gbuffer.tiles",
+             "gbuffer.held", "fog", "view")
+    writes = ("out", "linear", "gbuffer.held")
 
     def run(self, r, f) -> None:
         look, e, v = f.still, f.still.effects, f.view
         mode = BLUR_MODES[e.blur]
         sun = f.gbuffer.sunlight is not None
         g = f.gbuffer
-        # every pixel's near surface; then, over the tiles that hold one, the pixels with two
-        # (passes/resolve.frag, passes/tiles.vert)
         defines = dict(FOG_SCALE=e.fog_scale, BLUR_MODE=mode, SUN_LIGHT=int(sun))
-        progs = [r.programs.get(FULLSCREEN, "passes/composite.frag", TWO_SURFACES=0, **defines)]
+        held = f.held_fog is not None and mode != BLUR_MODES["single"]
+        if held:
+            inputs = self._held_inputs(r, f, defines)
+            progs = [r.programs.get(FULLSCREEN, "passes/composite_held.frag", **defines)]
+        else:
+            progs = [r.programs.get(FULLSCREEN, "passes/composite.frag", TWO_SURFACES=0, **defines)]
         if g.two_surfaces:
             progs.append(r.programs.get("passes/tiles.vert", "passes/composite.frag", TWO_SURFACES=1,
                                         TILE=SILHOUETTE_TILE, **defines))
@@ -51,8 +69,12 @@ class CompositePass(Pass):
             "uPhaseHG": e.phase == "henyey-greenstein", "uAnisotropy": e.anisotropy,
             "uShafts": e.shafts,
             "uMaxOpacity": e.max_opacity, "uBlurExponent": e.blur_exponent}
-        for prog in progs:
-            set_uniforms(prog, uniforms)
+        for i, prog in enumerate(progs):
+            # the held composite reads only the colours and the max opacity per frame
+            set_uniforms(prog, {k: uniforms[k] for k in HELD_UNIFORMS} if held and i == 0 else uniforms)
+        if held:
+            for name, tex in zip(("uHeldA", "uHeldB", "uHeldW"), inputs.color_attachments):
+                tex.use(TEX[name])
         if mode == BLUR_MODES["single"]:
             g.mipmaps()   # the fused blur reads the scene's mip pyramid
         g.color.use(TEX["uColor"])
@@ -73,3 +95,31 @@ class CompositePass(Pass):
         if g.two_surfaces:
             g.tiles.use(TEX["uTiles"])
             r.programs.draw(progs[1], moderngl.TRIANGLES, vertices=6, instances=g.tiles.width * g.tiles.height)
+
+    @staticmethod
+    def _held_inputs(r, f, defines: dict):
+        """The held composite's inputs over the frame's held fog, drawn if what they depend
+        on changed (held_inputs_key): the still scene pass, and the fog target's 1/distance
+        and lit share, which are the held fog's."""
+        look, e, v, g = f.still, f.still.effects, f.view, f.gbuffer
+        h = f.held_fog
+        key = held_inputs_key(f)
+        fbo = h.composite_inputs(r.ctx, f.targets.size)
+        if h.inputs_key == key:
+            return fbo
+        prog = r.programs.get(FULLSCREEN, "passes/composite_inputs.frag", FOG_SCALE=e.fog_scale,
+                              SUN_LIGHT=defines["SUN_LIGHT"])
+        set_uniforms(prog, {"uFwd": v.fwd, "uRight": v.right, "uUp": v.up, "uSunDir": look.sun.direction(),
+                            "uScatterStart": e.scatter_start, "uSkyDistance": e.sky_distance,
+                            "uSkyAffect": e.sky_affect, "uScatterExponent": e.scatter_exponent,
+                            "uPhaseHG": e.phase == "henyey-greenstein", "uAnisotropy": e.anisotropy,
+                            "uShafts": e.shafts})
+        g.color.use(TEX["uColor"])
+        g.invdist.use(TEX["uInvDist"])
+        if g.sunlight is not None:
+            g.sunlight.use(TEX["uSunLight"])
+        f.fog_tex.use(TEX["uFog"])
+        fbo.use()
+        r.programs.draw(prog, moderngl.TRIANGLES)
+        h.inputs_key = key
+        return fbo

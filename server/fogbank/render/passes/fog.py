@@ -9,9 +9,11 @@ import math
 
 import moderngl
 
+from fogbank.kinds import KINDS
 from fogbank.kinds.packing import loop_tables
 from fogbank.render.gl import TEX, set_uniforms
 from fogbank.render.passes.base import Pass
+from fogbank.render.passes.fog_filter import filter_fog
 
 
 def bind_fog(r, prog, plan) -> None:
@@ -32,18 +34,74 @@ def bind_fog(r, prog, plan) -> None:
     set_uniforms(prog, plan.uniforms)
 
 
+def held_key(f, plan) -> tuple:
+    """What a still camera's held fog (stage 1) depends on: the scene pass it was drawn
+    over, the fog scale, the time-invariant layers' plan, and the effects it reads."""
+    e = f.still.effects
+    return (f.gbuffer.scene_key, e.fog_scale, plan.signature(), e.sun_through_fog, e.shafts > 0, e.sky_distance)
+
+
 class FogPass(Pass):
+    """The whole fog per fog texel; or, for a stream whose camera stays still (the scene
+    pass held, Frame.hold_fog), in two stages (passes/fog.frag FOG_STAGE): the layers that
+    do not change with time, and the shafts' lit share (filtered as passes/fog_filter.py
+    does), are drawn once into sums held with the scene pass, and each frame draws only
+    the layers that move (wind, drift, particles) over them. The sums are built on the
+    second frame that asks for the same ones, so a look changed at every frame (a slider
+    dragged) draws the whole fog once, as before."""
     name = "fog"
-    reads = ("gbuffer.invdist", "fog_plan", "view", "shadow_map")
-    writes = ("fog",)
+    reads = ("gbuffer.invdist", "gbuffer.held", "fog_plan", "view", "shadow_map")
+    writes = ("fog", "gbuffer.held")
 
     def run(self, r, f) -> None:
         e = f.still.effects
         fbo, tex = f.targets.fog_target(e.fog_scale)
-        fbo.use()
         plan = f.fog_plan()
+        held = self._held(r, f, plan) if plan.split and not f.raymarch_steps else None
+        fbo.use()
+        if held is None:
+            prog = r.programs.fog(plan.key, f.raymarch_steps, e.sun_through_fog, e.shafts > 0)
+            self._draw(r, f, prog, plan, shafts=e.shafts > 0)
+        else:
+            moving = plan.split[1]
+            prog = r.programs.fog(moving.key, None, e.sun_through_fog, e.shafts > 0, stage=2,
+                                  held_direct=held.direct is not None)
+            held.texture.use(TEX["uHeld"])
+            if held.direct is not None:
+                held.direct.use(TEX["uHeldDirect"])
+            self._draw(r, f, prog, moving, shafts=False)
+            f.held_fog = held
+            f.lit_filtered = e.shafts > 0
+        f.fog_tex = tex
+
+    def _held(self, r, f, plan):
+        """The frame's held fog, drawn now if this is the second frame that asks for it;
+        None: draw the whole fog (the first frame that asks)."""
+        e, g = f.still.effects, f.gbuffer
+        still = plan.split[0]
+        key = held_key(f, still)
+        h = g.held.get(e.fog_scale)
+        if h is not None and h.key == key:
+            return h
+        if g.fog_seen.get(e.fog_scale) != key:
+            g.fog_seen[e.fog_scale] = key
+            return None
+        direct = any(KINDS[k].log_transmittance is not None for k in still.packed.kinds)
         shafts = e.shafts > 0
-        prog = r.programs.fog(plan.key, f.raymarch_steps, e.sun_through_fog, shafts)
+        r.caches.park()   # held_fog may release targets: never the bound framebuffer
+        h = g.held_fog(r.ctx, e.fog_scale, direct, filtered=shafts)
+        h.key = None
+        h.fbo.use()
+        prog = r.programs.fog(still.key, None, e.sun_through_fog, shafts, stage=1, held_direct=direct)
+        self._draw(r, f, prog, still, shafts=shafts)
+        if shafts:   # the lit share, filtered once (passes/fog_filter.py: only it was sampled)
+            filter_fog(r, h.sums, h.filtered[0], filter_t=False, filter_lit=True)
+        h.key = key
+        return h
+
+    @staticmethod
+    def _draw(r, f, prog, plan, shafts: bool) -> None:
+        e = f.still.effects
         bind_fog(r, prog, plan)
         v = f.view
         # the angle one fog texel subtends (vertically), for filtering distant noise
@@ -61,4 +119,3 @@ class FogPass(Pass):
         r.programs.draw(prog, moderngl.TRIANGLES)
         if shafts:   # the unit's own filtering again, for the scene pass's PCF
             r.shadow.nearest.clear(TEX["uShadow"])
-        f.fog_tex = tex

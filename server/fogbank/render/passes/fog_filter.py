@@ -23,19 +23,27 @@ def jittered(look) -> bool:
     return look.effects.shafts > 0 or jittered_t(look)
 
 
+def filter_fog(r, source, fbo, filter_t: bool, filter_lit: bool) -> None:
+    """The filter of `source` (a fog target's layout) into `fbo`: only what was sampled
+    with a jitter; closed-form channels pass through exact."""
+    fbo.use()   # the particle quads draw into the bound target
+    source.use(TEX["uFog"])
+    prog = r.programs.get(FULLSCREEN, "passes/fog_filter.frag")
+    set_uniforms(prog, {"uFilterT": filter_t, "uFilterLit": filter_lit})
+    r.programs.draw(prog, moderngl.TRIANGLES)
+
+
 class FogFilterPass(Pass):
     name = "fog_filter"
     reads = ("fog", "look")
     writes = ("fog",)
 
     def run(self, r, f) -> None:
-        if not jittered(f.still):
+        filter_t = jittered_t(f.still)
+        # a held fog's lit share was filtered when it was drawn (passes/fog.py)
+        filter_lit = f.still.effects.shafts > 0 and not f.lit_filtered
+        if not (filter_t or filter_lit):
             return
         fbo, tex = f.targets.fog_target(f.still.effects.fog_scale, 1)
-        fbo.use()   # the particle quads draw into the bound target
-        f.fog_tex.use(TEX["uFog"])
-        prog = r.programs.get(FULLSCREEN, "passes/fog_filter.frag")
-        # only what was sampled is filtered: closed-form channels pass through exact
-        set_uniforms(prog, {"uFilterT": jittered_t(f.still), "uFilterLit": f.still.effects.shafts > 0})
-        r.programs.draw(prog, moderngl.TRIANGLES)
+        filter_fog(r, f.fog_tex, fbo, filter_t, filter_lit)
         f.fog_tex = tex

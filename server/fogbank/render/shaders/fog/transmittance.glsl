@@ -77,28 +77,43 @@ vec2 fogDepths(vec3 Os, vec3 w, float ds) {
     return vec2(tau, tauDirect);
 }
 
-// O: eye (m, relative to E), w: unit direction, d: length (m).
-float fogRawTransmittance(vec3 O, vec3 w, float d) {
-    if (uDensity <= 0.0) return 1.0;                  // no fog (and no pow(0, 0) below)
-    // beyond the cutoff: Biri's "transparency set to 1 to represent the fog color" (T = 0),
-    // or Unreal's unfogged far field (T = 1)
+// The view segment's two sums (fogDepths) from O (m, relative to E) along the unit w for
+// d metres, from the start distance on (the segment begins there).
+vec2 fogViewDepths(vec3 O, vec3 w, float d) {
+    return fogDepths(O + w * uStartDistance, w, max(d - uStartDistance, 0.0));
+}
+
+// The raw transmittance of a view segment d metres long from its two sums t = (tau,
+// tauDirect). No fog (uDensity 0, and no pow(0, 0)): 1. Beyond the cutoff: Biri's
+// "transparency set to 1 to represent the fog color" (T = 0), or Unreal's unfogged far
+// field (T = 1). max(): a carving body never takes the total below 0 (and float32
+// rounding of a depth that is >= 0 in exact arithmetic is absorbed).
+float fogFromDepths(vec2 t, float d) {
+    if (uDensity <= 0.0) return 1.0;
     if (uCutoffDistance > 0.0 && d > uCutoffDistance) return uCutoffFog ? 0.0 : 1.0;
-    vec3 Os = O + w * uStartDistance;                 // the segment begins at the start distance
-    vec2 t = fogDepths(Os, w, max(d - uStartDistance, 0.0));
-    // max(): a carving body never takes the total below 0 (and float32 rounding of a
-    // depth that is >= 0 in exact arithmetic is absorbed)
     return exp(-(max(t.x, 0.0) + t.y));
 }
 
+// O: eye (m, relative to E), w: unit direction, d: length (m).
+float fogRawTransmittance(vec3 O, vec3 w, float d) {
+    return fogFromDepths(fogViewDepths(O, w, d), d);
+}
+
 #ifdef SUN_THROUGH_FOG
+// The transmittance toward the sun from its exponential layers' optical depth tau (no fog:
+// 1; max() as in fogFromDepths).
+float fogSunFromDepth(float tau) {
+    if (uDensity <= 0.0) return 1.0;
+    return exp(-max(tau, 0.0));
+}
+
 // The sunlight that reaches the point P (m, relative to E): the transmittance of the
 // density layers along P -> P + L d, L the unit direction toward the sun and d the sky
 // distance, the same closed forms as a view ray's. The start and cutoff distances belong
 // to the view, and the direct layers (particles, distance fog) are effects of the view
 // distance, not media between P and the sun: neither enters here.
 float fogSunTransmittance(vec3 P, vec3 L, float d) {
-    if (uDensity <= 0.0) return 1.0;
-    return exp(-max(fogDepths(P, L, d).x, 0.0));
+    return fogSunFromDepth(fogDepths(P, L, d).x);
 }
 #endif
 #endif

@@ -11,12 +11,11 @@
 // 1: a second draw that redoes the pixels with a far surface, both mixed).
 #include "common/camera.glsl"
 #include "common/srgb.glsl"
-#include "common/phase.glsl"
 #include "fog/finish.glsl"
+#include "passes/composite_parts.glsl"
 in vec2 vUV;
 uniform sampler2D uColor;         // scene colour, linear (mipmapped when blurring: bilinear in the nearest level)
 uniform sampler2D uInvDist;       // full-resolution 1/distance
-uniform sampler2D uFog;           // (raw T, 1/distance, T toward the sun, lit share) at 1/FOG_SCALE size
 uniform float uShafts;            // how much the view ray's shadowed share takes from the in-scattering
 uniform sampler2D uSunLight;      // the direct sunlight in the scene colour, linear
 uniform sampler2D uFarColor;      // the pixel's far surface colour, linear; a: the near surface's coverage
@@ -24,13 +23,7 @@ uniform sampler2D uFarInvDist;    // its 1/distance
 uniform sampler2D uFarSunLight;   // its direct sunlight, linear
 uniform vec3 uFwd, uRight, uUp;
 uniform vec3 uFogColor;           // linear
-uniform vec3 uSunDir;
 uniform vec3 uScatterColor;       // sun colour * intensity * scatter colour * scatter strength
-uniform float uScatterExponent;
-uniform float uScatterStart;      // m, Gawron's ScatterStartDist (eq. 5); 0 = the view ray
-uniform bool uPhaseHG;            // the lobe: Henyey-Greenstein (true) or Gawron's power
-uniform float uAnisotropy;        // Henyey-Greenstein g
-uniform float uSkyDistance;       // m, how far a sky pixel's ray runs
 uniform float uSkyAffect;         // the share of its fog a sky pixel shows (Godot's sky affect)
 uniform float uBlurSigma;         // px at full fog
 uniform float uBlurExponent;
@@ -73,33 +66,17 @@ vec3 blurredScene(ivec2 px, float sigma, float invd, float sunLoss, vec2 full, v
     return wsum > 1e-6 ? acc / wsum : own;
 }
 
-// Depth-aware upsample (Biri 4.3; "nearest-depth" joint bilateral): the four nearest fog
-// texels weighted bilinearly and by how close their surface is to this pixel's; the raw
-// T, the T toward the sun and the lit share alike.
+// The (raw T, T toward the sun, lit share) at this pixel: the four texels by their
+// weights (at full fog resolution, its own texel).
 vec3 fogT(ivec2 px, float invd) {
 #if FOG_SCALE == 1
     return texelFetch(uFog, px, 0).rba;
 #else
-    ivec2 size = textureSize(uFog, 0);
-    vec2 p = (vec2(px) + 0.5) / float(FOG_SCALE) - 0.5;
-    ivec2 i0 = ivec2(floor(p));
-    vec2 f = p - vec2(i0);
-    vec3 acc = vec3(0.0), bestT = vec3(1.0);
-    float wsum = 0.0, best = 1e9;
-    for (int y = 0; y < 2; ++y) {
-        for (int x = 0; x < 2; ++x) {
-            vec4 s = texelFetch(uFog, clamp(i0 + ivec2(x, y), ivec2(0), size - 1), 0);
-            // relative depth difference in [0, 1]; 1e-6 1/m keeps sky-vs-sky at 0
-            float rel = abs(s.g - invd) / max(max(s.g, invd), 1e-6);
-            float wb = (x == 1 ? f.x : 1.0 - f.x) * (y == 1 ? f.y : 1.0 - f.y);
-            float w = wb * exp(-rel * rel * 400.0);   // ~5% difference halves the weight
-            acc += w * s.rba;
-            wsum += w;
-            if (rel < best) { best = rel; bestT = s.rba; }
-        }
-    }
-    // no neighbour on this surface (a thin object): take the closest in depth
-    return wsum > 1e-4 ? acc / wsum : bestT;
+    vec2 f;
+    ivec2 i0 = fogQuad(px, f);
+    vec4 s[4] = vec4[4](fogTexelOf(i0, 0), fogTexelOf(i0, 1), fogTexelOf(i0, 2), fogTexelOf(i0, 3));
+    vec4 w = fogWeights(s, f, invd);
+    return w.x * s[0].rba + w.y * s[1].rba + w.z * s[2].rba + w.w * s[3].rba;
 #endif
 }
 
@@ -135,15 +112,7 @@ vec4 fogged(ivec2 px, vec3 scene, vec3 sunlight, float invd, vec3 w, vec2 full, 
     float T = fogFinish(Ts.x);
     if (invd <= 0.0) T = 1.0 - uSkyAffect * (1.0 - T);   // the sky: only its share of the fog
     float sunLoss = 1.0 - Ts.y;   // the share of the direct sunlight the fog takes away
-    // Gawron eqs. 5-8: p_s = (WorldPos - CameraPos) + ScatterStartDist, the scalar added to
-    // each component as in the paper's Listing 1; F = max(0, p_s/|p_s| . L)^exponent;
-    // C_fog + C_scatter F. With no start distance p_s/|p_s| is the view ray itself. With
-    // the Henyey-Greenstein phase, F = 4 pi p_HG(p_s/|p_s| . L, g) (common/phase.glsl).
-    float dist = invd > 0.0 ? 1.0 / invd : uSkyDistance;
-    vec3 ws = uScatterStart > 0.0 ? normalize(w * dist + vec3(uScatterStart)) : w;
-    float mu = dot(ws, uSunDir);
-    float F = uPhaseHG ? phaseHG(mu, uAnisotropy) : pow(max(mu, 0.0), uScatterExponent);
-    vec3 fog = uFogColor + uScatterColor * F * mix(1.0, Ts.z, uShafts);
+    vec3 fog = uFogColor + uScatterColor * scatterLobe(w, invd) * mix(1.0, Ts.z, uShafts);
 #if SUN_LIGHT
     scene -= sunLoss * sunlight;
 #endif

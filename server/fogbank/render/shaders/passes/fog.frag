@@ -5,6 +5,19 @@
 // multiplied theirs in), the inverse distance used, for the depth-aware upsample, and,
 // with SUN_THROUGH_FOG, the transmittance from the visible point toward the sun (1 for the
 // sky and without it), and, with SHAFTS, the lit share of the view ray (light shafts).
+//
+// FOG_STAGE (render/passes/fog.py), for a camera that stays still while time runs:
+//   0 (or undefined): the whole fog, as above.
+//   1: the layers that do not change with time, as sums that later frames reuse: (tau,
+//      1/distance, tau toward the sun, lit share) and, with STATIC_DIRECT, tauDirect in a
+//      second target. Only this stage samples the shafts (the lit share depends on the
+//      camera, the sun and the scene alone).
+//   2: every other layer, added to the sums of stage 1 (uHeld, uHeldDirect) before the
+//      exponential: the same closed forms over the same segments, so stages 1 + 2 give
+//      stage 0's texels up to the float32 rounding of the order of the sums.
+#ifndef FOG_STAGE
+#define FOG_STAGE 0
+#endif
 #include "fog/transmittance.glsl"
 #include "common/camera.glsl"
 #include "passes/fog_texel.glsl"
@@ -14,7 +27,20 @@ uniform sampler2D uInvDist;       // full-resolution 1/distance (1/m), 0 = sky
 uniform vec3 uFwd, uRight, uUp;   // camera basis, right/up scaled by tan(fov/2)
 uniform float uSkyDistance;       // m
 uniform vec3 uSunDir;             // unit, toward the sun
+#if FOG_STAGE == 1
+layout(location = 0) out vec4 fOut;  // (tau, 1/distance used, tau toward the sun, lit share)
+#ifdef STATIC_DIRECT
+layout(location = 1) out float fDirect;   // tauDirect
+#endif
+#else
 layout(location = 0) out vec4 fOut;  // (raw T, 1/distance used, T toward the sun, lit share)
+#endif
+#if FOG_STAGE == 2
+uniform sampler2D uHeld;          // stage 1's (tau, 1/distance, tau toward the sun, lit share)
+#ifdef STATIC_DIRECT
+uniform sampler2D uHeldDirect;    // stage 1's tauDirect
+#endif
+#endif
 
 #ifdef SHAFTS
 uniform sampler2DShadow uShadow;  // the sun's depth map (compare: 1 = lit)
@@ -47,11 +73,42 @@ float litShare(vec3 w, float d, vec2 px) {
 #endif
 
 void main() {
+#if FOG_STAGE == 2
+    ivec2 q = ivec2(gl_FragCoord.xy);
+    vec4 held = texelFetch(uHeld, q, 0);
+    FogTexel ft = FogTexel(fogTexelRay(gl_FragCoord.xy, textureSize(uInvDist, 0), uFwd, uRight, uUp), held.g);
+#else
     FogTexel ft = fogTexel(gl_FragCoord.xy, uInvDist, uFwd, uRight, uUp);
+#endif
     // volume noise's points, jittered per pixel (fog/transmittance.glsl); shifted from the
     // shafts' pixel so the two patterns do not line up
     gSampleJitter = interleavedGradientNoise(floor(gl_FragCoord.xy) + vec2(7.0, 13.0));
     float d = ft.invd > 0.0 ? 1.0 / ft.invd : uSkyDistance;
+#if FOG_STAGE == 1
+    vec2 t = fogViewDepths(vec3(0.0), ft.w, d);
+    float sunTau = 0.0;
+#ifdef SUN_THROUGH_FOG
+    if (ft.invd > 0.0) sunTau = fogDepths(ft.w * d, uSunDir, uSkyDistance).x;
+#endif
+    float lit = 1.0;
+#ifdef SHAFTS
+    lit = litShare(ft.w, d, floor(gl_FragCoord.xy));
+#endif
+    fOut = vec4(t.x, ft.invd, sunTau, lit);
+#ifdef STATIC_DIRECT
+    fDirect = t.y;
+#endif
+#elif FOG_STAGE == 2
+    vec2 t = fogViewDepths(vec3(0.0), ft.w, d) + vec2(held.r, 0.0);
+#ifdef STATIC_DIRECT
+    t.y += texelFetch(uHeldDirect, q, 0).r;
+#endif
+    float sunT = 1.0;
+#ifdef SUN_THROUGH_FOG
+    if (ft.invd > 0.0) sunT = fogSunFromDepth(fogDepths(ft.w * d, uSunDir, uSkyDistance).x + held.b);
+#endif
+    fOut = vec4(fogFromDepths(t, d), ft.invd, sunT, held.a);
+#else
     float sunT = 1.0;
 #ifdef SUN_THROUGH_FOG
     if (ft.invd > 0.0) sunT = fogSunTransmittance(ft.w * d, uSunDir, uSkyDistance);
@@ -61,4 +118,5 @@ void main() {
     lit = litShare(ft.w, d, floor(gl_FragCoord.xy));
 #endif
     fOut = vec4(fogRawTransmittance(vec3(0.0), ft.w, d), ft.invd, sunT, lit);
+#endif
 }

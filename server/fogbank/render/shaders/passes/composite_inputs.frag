@@ -1,0 +1,46 @@
+// The held composite's inputs (render/passes/composite.py): for a stream whose camera
+// stays still, what passes/composite.frag computes per pixel from the scene pass and the
+// held fog (passes/fog.py), neither of which changes while time runs, drawn once:
+//   A: (the scene colour less its direct sunlight with SUN_LIGHT, else the scene colour;
+//       the in-scattering lobe times the lit share's term, F mix(1, lit, uShafts))
+//   B: (the direct sunlight, linear; the share of its fog the pixel shows: 1 for a
+//       surface, uSkyAffect for the sky)
+//   W: the depth-aware upsample's weights of the four fog texels (fogWeights)
+// so that each frame (passes/composite_held.frag) only blends the moving fog texels.
+// Defined by the renderer: FOG_SCALE (1, 2, 4), SUN_LIGHT.
+#include "common/camera.glsl"
+#include "passes/composite_parts.glsl"
+in vec2 vUV;
+uniform sampler2D uColor;         // scene colour, linear
+uniform sampler2D uInvDist;       // full-resolution 1/distance, 0 = sky
+uniform sampler2D uSunLight;      // the direct sunlight in the scene colour, linear
+uniform vec3 uFwd, uRight, uUp;
+uniform float uShafts;            // how much the view ray's shadowed share takes from the in-scattering
+uniform float uSkyAffect;         // the share of its fog a sky pixel shows
+layout(location = 0) out vec4 fA;
+layout(location = 1) out vec4 fB;
+layout(location = 2) out vec4 fW;
+
+void main() {
+    ivec2 px = ivec2(gl_FragCoord.xy);
+    float invd = texelFetch(uInvDist, px, 0).r;
+    vec3 w = viewRay(vUV * 2.0 - 1.0, uFwd, uRight, uUp);
+    float lit;
+#if FOG_SCALE == 1
+    fW = vec4(1.0, 0.0, 0.0, 0.0);
+    lit = texelFetch(uFog, px, 0).a;
+#else
+    vec2 f;
+    ivec2 i0 = fogQuad(px, f);
+    vec4 s[4] = vec4[4](fogTexelOf(i0, 0), fogTexelOf(i0, 1), fogTexelOf(i0, 2), fogTexelOf(i0, 3));
+    fW = fogWeights(s, f, invd);
+    lit = fW.x * s[0].a + fW.y * s[1].a + fW.z * s[2].a + fW.w * s[3].a;
+#endif
+    vec3 scene = texelFetch(uColor, px, 0).rgb;
+    vec3 sun = vec3(0.0);
+#if SUN_LIGHT
+    sun = texelFetch(uSunLight, px, 0).rgb;
+#endif
+    fA = vec4(scene - sun, scatterLobe(w, invd) * mix(1.0, lit, uShafts));
+    fB = vec4(sun, invd <= 0.0 ? uSkyAffect : 1.0);
+}

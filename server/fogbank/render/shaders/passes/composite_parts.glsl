@@ -1,0 +1,55 @@
+// What the composites share (passes/composite.frag, composite_held.frag and
+// composite_inputs.frag): the fog target's depth-aware upsample and the in-scattering lobe.
+// Defined by the renderer: FOG_SCALE (1, 2, 4).
+#include "common/phase.glsl"
+uniform sampler2D uFog;           // (raw T, 1/distance, T toward the sun, lit share) at 1/FOG_SCALE size
+uniform vec3 uSunDir;             // unit, toward the sun
+uniform float uScatterExponent;
+uniform float uScatterStart;      // m, Gawron's ScatterStartDist (eq. 5); 0 = the view ray
+uniform bool uPhaseHG;            // the lobe: Henyey-Greenstein (true) or Gawron's power
+uniform float uAnisotropy;        // Henyey-Greenstein g
+uniform float uSkyDistance;       // m, how far a sky pixel's ray runs
+
+// Depth-aware upsample (Biri 4.3; "nearest-depth" joint bilateral), in steps that the
+// held composite shares (passes/composite_inputs.frag keeps each pixel's weights). The
+// four fog texels nearest px are k = 0..3 at i0 + (k & 1, k >> 1), i0 the one at or below
+// px's centre; f is px's place among them.
+ivec2 fogQuad(ivec2 px, out vec2 f) {
+    vec2 p = (vec2(px) + 0.5) / float(FOG_SCALE) - 0.5;
+    ivec2 i0 = ivec2(floor(p));
+    f = p - vec2(i0);
+    return i0;
+}
+
+vec4 fogTexelOf(ivec2 i0, int k) {
+    return texelFetch(uFog, clamp(i0 + ivec2(k & 1, k >> 1), ivec2(0), textureSize(uFog, 0) - 1), 0);
+}
+
+// Their weights: bilinear, and by how close each texel's surface (its g, 1/distance) is
+// to this pixel's, normalised; with no neighbour on this surface (a thin object), all on
+// the closest in depth.
+vec4 fogWeights(vec4 s[4], vec2 f, float invd) {
+    vec4 w, best = vec4(1.0, 0.0, 0.0, 0.0);
+    float bestRel = 1e9;
+    for (int k = 0; k < 4; ++k) {
+        // relative depth difference in [0, 1]; 1e-6 1/m keeps sky-vs-sky at 0
+        float rel = abs(s[k].g - invd) / max(max(s[k].g, invd), 1e-6);
+        float wb = ((k & 1) == 1 ? f.x : 1.0 - f.x) * ((k >> 1) == 1 ? f.y : 1.0 - f.y);
+        w[k] = wb * exp(-rel * rel * 400.0);   // ~5% difference halves the weight
+        if (rel < bestRel) { bestRel = rel; best = vec4(k == 0, k == 1, k == 2, k == 3); }
+    }
+    float wsum = w.x + w.y + w.z + w.w;
+    return wsum > 1e-4 ? w / wsum : best;
+}
+
+// Gawron eqs. 5-8: p_s = (WorldPos - CameraPos) + ScatterStartDist, the scalar added to
+// each component as in the paper's Listing 1; F = max(0, p_s/|p_s| . L)^exponent. With no
+// start distance p_s/|p_s| is the view ray w itself. With the Henyey-Greenstein phase,
+// F = 4 pi p_HG(p_s/|p_s| . L, g) (common/phase.glsl). The fog's colour is C_fog + C_scatter F.
+float scatterLobe(vec3 w, float invd) {
+    float dist = invd > 0.0 ? 1.0 / invd : uSkyDistance;
+    vec3 ws = uScatterStart > 0.0 ? normalize(w * dist + vec3(uScatterStart)) : w;
+    float mu = dot(ws, uSunDir);
+    return uPhaseHG ? phaseHG(mu, uAnisotropy) : pow(max(mu, 0.0), uScatterExponent);
+}
+

@@ -1,0 +1,108 @@
+"""The composite (render/passes/composite.py) of a stream whose camera stays still: the
+held composite, from inputs drawn once over the still scene and the held fog, against the
+calibration scene's float64 reference blend (tests/calibration.py), and against the full
+composite of the same frame as a still, over the effects it reads."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from calibration import calibration_still, check_pixels
+from fogbank.model.params import StillParams
+from fogbank.render.passes import FRAME_PASSES
+
+WINDY = [{"kind": "height", "density": 0.05, "falloff": 0.2, "base": 0.0},
+         {"kind": "cosine", "density": 0.01, "c0": 1.0, "scale": 10.0, "wind": True,
+          "terms": [{"amp": 0.8, "k": (1.0, 2.0, 0.5), "phase": 0.3}]},
+         {"kind": "particles", "count": 300, "emitter": (0.0, 1.0, -40.0), "spread": 70.0, "speed": 3.0,
+          "radius": 5.0, "alpha": 0.5, "life_min": 30, "life_max": 60}]
+
+
+def held_frame(renderer, slot: str, msaa: bool = True):
+    """Draw a look as a stream does while time runs and the camera stays, in a new slot:
+    two frames before, at earlier times, so that this one is drawn over the held fog and
+    (unless the blur is fused) the held composite's inputs (asserted)."""
+    def render(s: StillParams) -> np.ndarray:
+        renderer.drop_slot(slot)
+        for dt in (-1.0, -0.5):
+            renderer.render(s.model_copy(update={"time": s.time + dt}), slot, msaa, hold_fog=True)
+        f = renderer.begin(s, slot, msaa, hold_fog=True)
+        for p in FRAME_PASSES:
+            p.run(renderer, f)
+        renderer.keep_only(f)
+        assert f.held_fog is not None
+        assert (f.held_fog.inputs_key is not None) == (s.effects.blur != "single")
+        image = f.image
+        renderer.drop_slot(slot)
+        return image
+    return render
+
+
+@pytest.mark.parametrize("effects", [{}, {"density": 1.7, "max_opacity": 0.8, "start_distance": 12.0},
+                                     {"cutoff_distance": 60.0, "cutoff_mode": "fog"}, {"sky_affect": 0.3}])
+def test_a_held_frame_matches_the_reference_blend(renderer, effects):
+    """At full fog resolution (a coarser fog's upsample is held to the full composite's in
+    the next test: against this exact reference it errs by its interpolation alone)."""
+    still = calibration_still(layers=WINDY, time=4.0, density=effects.get("density", 1.0))
+    eff = {k: v for k, v in effects.items() if k != "density"}
+    still = still.model_copy(update={"effects": still.effects.model_copy(update=eff)})
+    objects = check_pixels(renderer, still, render=held_frame(renderer, "held-calibration"))
+    assert objects == {-1, 0, 1, 2, 3, 4}
+
+
+@pytest.mark.parametrize("effects", [
+    {"phase": "henyey-greenstein", "anisotropy": 0.6, "scatter": 0.2, "shafts": 1.0, "sun_through_fog": True},
+    {"phase": "gawron", "scatter_exponent": 8.0, "scatter": 0.3, "scatter_start": 40.0, "fog_scale": 4},
+    {"sun_through_fog": True, "blur": "separate", "blur_radius": 3.0, "sky_affect": 0.5},
+    {"blur": "single", "blur_radius": 2.0},   # the fused blur keeps the full composite
+])
+@pytest.mark.parametrize("msaa", [True, False])
+def test_a_held_frame_equals_the_full_composite_of_the_same_look(renderer, effects, msaa):
+    """Over the default scene, with the effects the held inputs keep (the lobe, the lit
+    share, the direct sunlight, the sky's share): the same frame composited in full, as a
+    still, within a level (the inputs are kept as RGBA16F), and most pixels exact."""
+    from fogbank.model.presets import preset_dict
+    look = preset_dict("default")
+    look = {**look, "width": 320, "height": 180, "time": 7.0, "wind": {"direction": 70.0, "speed": 12.0},
+            "effects": {**look["effects"], "blur": "off", **effects}}
+    s = StillParams.model_validate(look)
+    held = held_frame(renderer, "held-vs-full", msaa)(s).astype(int)
+    renderer.drop_slot("full-composite")   # a scene pass of its own, with the held one's MSAA
+    full = renderer.render(s, "full-composite", msaa).astype(int)
+    d = np.abs(held - full).max(axis=2)
+    assert int(d.max()) <= 1
+    assert float((d > 0).mean()) <= 0.15
+    # the frames differ from one at another time: the fog moves, and the check has teeth
+    other = renderer.render(s.model_copy(update={"time": 9.0}), "full-composite", msaa).astype(int)
+    assert float((np.abs(other - full).max(axis=2) > 2).mean()) > 0.01
+    renderer.drop_slot("full-composite")
+    assert renderer.ctx.error == "GL_NO_ERROR"
+
+
+@pytest.mark.parametrize("change", [{"anisotropy": -0.4}, {"phase": "gawron", "scatter_exponent": 4.0},
+                                    {"scatter_start": 60.0}, {"shafts": 0.3}, {"sky_affect": 0.2}])
+def test_an_effect_changed_over_held_fog_redraws_the_held_inputs(renderer, change):
+    """Time runs, the camera stays, and an effect the held inputs keep changes: the fog
+    stays held (it does not read the effect) and the next frame is the new look's."""
+    from fogbank.model.presets import preset_dict
+    look = preset_dict("default")
+    look = {**look, "width": 320, "height": 180, "wind": {"direction": 70.0, "speed": 12.0},
+            "effects": {**look["effects"], "scatter": 0.3}}
+    before = StillParams.model_validate({**look, "time": 5.0})
+    after = StillParams.model_validate({**look, "time": 6.0, "effects": {**look["effects"], **change}})
+    renderer.drop_slot("held-change")
+    for t in (4.0, 4.5, 5.0):
+        renderer.render(before.model_copy(update={"time": t}), "held-change", True, hold_fog=True)
+    f = renderer.begin(after, "held-change", True, hold_fog=True)
+    for p in FRAME_PASSES:
+        p.run(renderer, f)
+    assert f.held_fog is not None
+    held = f.image.astype(int)
+    renderer.drop_slot("held-change")
+    renderer.drop_slot("full-change")
+    full = renderer.render(after, "full-change", True).astype(int)
+    old = renderer.render(after.model_copy(update={"effects": before.effects}), "full-change", True).astype(int)
+    assert int(np.abs(held - full).max()) <= 1
+    assert int(np.abs(old - full).max()) > 3   # the effect shows: the check has teeth
+    renderer.drop_slot("full-change")
