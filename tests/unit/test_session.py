@@ -248,8 +248,13 @@ def test_a_look_near_the_play_budget_keeps_its_refinement_quality():
     s = Session("a", now=0.0)
     s.apply(msg('{"type": "view", "width": 960, "height": 540}'), 0.0)
     s.cost_ratio = 0.5   # as if measured: the first frame is the full look
-    # after the first frame the worker holds the scene pass: the next frames' cost
-    full = estimate(s.start_frame(1.0).still, msaa=True, compiled=True, scene_cached=True).seconds * 1000
+    # after the first frames the worker holds the scene pass and the fog that does not move:
+    # the next frames' cost
+    first = s.start_frame(1.0)
+    for t in (1.1, 1.2):
+        s.making = 0
+        s.start_frame(t)
+    full = estimate(first.still, msaa=True, compiled=True, scene_cached=True, fog_held=True).seconds * 1000
     for ratio, msaa in ((1.1, True), (1.3, False), (1.1, False), (0.7, True)):
         s.cost_ratio = ratio * PLAY_BUDGET_MS / full
         s.making = 0
@@ -367,3 +372,30 @@ def test_a_previews_particles_are_the_looks_swarm_thinned():
         layer = s._preview_still(s.fog, rung, 1.0).layers[0]
         assert layer.model_dump_json() == s.fog.layers[0].model_dump_json()
         assert layer.drawn == -(-64 // round(1 / detail))
+
+
+def test_the_fog_the_worker_holds_over_a_still_camera_is_not_in_the_estimate():
+    """Time running with the camera still: from the third frame the worker holds the fog's
+    time-invariant layers and shafts with the scene pass (render/passes/fog.py), so the
+    estimate leaves them out; a change to a held layer, or a camera move, puts them back
+    until the worker holds them again."""
+    from fogbank.workers.cost import estimate
+    s = Session("a", now=0.0)
+    s.apply(msg('{"type": "view", "width": 960, "height": 540}'), 0.0)
+    s.cost_ratio = 0.5   # as if measured: every frame is the full look
+    jobs = []
+    for t in (1.0, 1.1, 1.2, 1.3):
+        jobs.append(s.start_frame(t))
+        s.frame_done(jobs[-1], sent=False)
+    still = jobs[0].still
+    scene = estimate(still, msaa=True, compiled=True, scene_cached=True).seconds * 1000
+    fog = estimate(still, msaa=True, compiled=True, scene_cached=True, fog_held=True).seconds * 1000
+    assert fog < scene   # the default look's height fog, potential and shafts are held
+    assert [j.estimate_ms for j in jobs[1:]] == [scene, fog, fog]
+    s.apply(msg('{"type": "params", "params": {"layers": [{"kind": "height", "density": 0.03}]}}'), 1.4)
+    changed = s.start_frame(1.4 + 2 * INPUT_SETTLE_S)   # a held layer changed: drawn again
+    assert changed.estimate_ms == estimate(changed.still, msaa=True, compiled=True, scene_cached=True).seconds * 1000
+    s.frame_done(changed, sent=False)
+    again = s.start_frame(1.5 + 2 * INPUT_SETTLE_S)
+    assert again.estimate_ms == estimate(again.still, msaa=True, compiled=True, scene_cached=True,
+                                         fog_held=True).seconds * 1000

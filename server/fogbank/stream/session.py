@@ -14,6 +14,7 @@ from typing import Any
 
 from pydantic import ValidationError
 
+from fogbank.kinds.packing import split_by_time
 from fogbank.model import errors
 from fogbank.model import presets as P
 from fogbank.model.params import FogParams, StillParams
@@ -131,6 +132,8 @@ class Session:
         # the scene pass this session's worker holds at each frame size: (scene, camera, sun,
         # sunlight target) and whether with MSAA (render/targets.py keeps one per slot and size)
         self.scenes: dict[tuple[int, int], tuple[tuple, bool]] = {}
+        # the held-fog key of the last frame at each size (_held_fog_of; render/passes/fog.py)
+        self.fogs: dict[tuple[int, int], tuple] = {}
         self.fog = FogParams.model_validate(P.preset_dict("default"))
         self._base_sim = self.fog.time
         self._base_wall = now
@@ -291,6 +294,20 @@ class Session:
     def _scene_of(still: StillParams) -> tuple:
         return (still.scene, still.camera, still.sun, still.effects.sun_through_fog)
 
+    @staticmethod
+    def _held_fog_of(still: StillParams) -> tuple:
+        """What the fog a worker holds over a still scene pass depends on (render/passes/fog.py
+        held_key): the layers that do not change with time, and the look's fog effects."""
+        return (split_by_time(still)[0].layers, still.effects, still.density, still.noise)
+
+    def _fog_held(self, still: StillParams, msaa: bool) -> bool:
+        """Whether the worker holds this frame's time-invariant fog: the scene pass is held,
+        and so was the last frame's at this size, with the same time-invariant fog (the
+        worker draws it on the second frame over a held scene pass that asks for it, and
+        keeps it while it is asked for)."""
+        size = (still.width, still.height)
+        return self._scene_cached(still, msaa) and self.fogs.get(size) == self._held_fog_of(still)
+
     def _scene_cached(self, still: StillParams, msaa: bool) -> bool:
         """Whether the worker holds this frame's scene pass: the last frame at its size drew
         the same scene, camera and sun (a frame without MSAA reuses one with it)."""
@@ -299,6 +316,11 @@ class Session:
 
     def _drew(self, still: StillParams, msaa: bool) -> None:
         size, key = (still.width, still.height), self._scene_of(still)
+        self.fogs.pop(size, None)
+        if self._scene_cached(still, msaa):   # the worker holds fog only over a held scene pass
+            self.fogs[size] = self._held_fog_of(still)
+            while len(self.fogs) > 2 * len(PREVIEW_RUNGS):
+                self.fogs.pop(next(iter(self.fogs)))
         if not self._scene_cached(still, msaa) or msaa:
             self.scenes.pop(size, None)
             self.scenes[size] = (key, msaa)
@@ -310,11 +332,13 @@ class Session:
         what a worker does once (compiling a fog program, baking a noise tile): those are
         not this look's cost per frame; nor the scene pass while the worker holds it (a
         slider dragged, or time running, with the camera still: a playing look's full frame
-        at 720p is a third of one with its scene drawn); `held` False: the look's own cost,
-        the scene drawn (two looks compared are compared alike)."""
+        at 720p is a third of one with its scene drawn), nor, while time runs over a still
+        camera, the fog the worker holds (_fog_held); `held` False: the look's own cost,
+        the scene and the whole fog drawn (two looks compared are compared alike)."""
         from fogbank.workers.cost import estimate
         return estimate(still, msaa=msaa, compiled=True, baked=True,
-                        scene_cached=held and self._scene_cached(still, msaa)).seconds * 1000.0
+                        scene_cached=held and self._scene_cached(still, msaa),
+                        fog_held=held and self._fog_held(still, msaa)).seconds * 1000.0
 
     def _recost(self, fog: FogParams, now: float) -> None:
         """On a new look whose estimate at the current rung differs from the last costed

@@ -13,9 +13,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from fogbank.kinds import KINDS
-from fogbank.kinds.packing import enabled, groups, uses_noise, variant
+from fogbank.kinds.packing import changes_with_time, enabled, groups, uses_noise, variant
 from fogbank.model.params import FogParams, StillParams
-from fogbank.render.passes.fog_filter import jittered
+from fogbank.render.passes.fog_filter import jittered, jittered_t
 from fogbank.render.targets import FOG_BPP, GBUFFER_BPP, LINEAR_BPP, MSAA_BPP, MSAA_SAMPLES, OUT_BPP, SUNLIGHT_BPP
 
 # seconds on the reference machine
@@ -75,12 +75,15 @@ def jit_seconds(variant: tuple) -> float:
 
 
 def estimate(still: StillParams, msaa: bool = True, fmt: str = "jpg", scale: float = 1.0,
-             compiled: bool = False, baked: bool = False, scene_cached: bool = False) -> Cost:
+             compiled: bool = False, baked: bool = False, scene_cached: bool = False,
+             fog_held: bool = False) -> Cost:
     """Seconds and memory to render and encode `still` (`scale` multiplies seconds); the
     fog program's first-draw compile is included unless `compiled`, the noise tile's bake
     unless `baked` (both once per worker: a stream's frame-to-frame estimates leave them
     out), and the scene pass unless `scene_cached` (a stream's worker keeps it while the
-    camera, scene and sun stay: render/renderer.py Renderer.begin)."""
+    camera, scene and sun stay: render/renderer.py Renderer.begin); with `fog_held` also
+    the layers that do not change with time, the shafts and their filter (the worker
+    holds them with the scene pass: render/passes/fog.py)."""
     px = still.width * still.height
     mpx = px / 1e6
     e = still.effects
@@ -90,15 +93,16 @@ def estimate(still: StillParams, msaa: bool = True, fmt: str = "jpg", scale: flo
     parts["width*height (composite, encode)"] = (COMPOSITE_S_PER_MPX + ENCODE_S_PER_MPX.get(fmt, 0.08)) * mpx
     if e.blur != "off":
         parts["effects.blur"] = BLUR_S_PER_MPX * mpx
-    for i, layer in enumerate(still.layers):
-        if layer.enabled:
-            parts[f"layers[{i}] ({KINDS[layer.kind].describe(layer)})"] = _layer_seconds(layer, fog_mpx)
+    drawn = [(i, layer) for i, layer in enumerate(still.layers)
+             if layer.enabled and not (fog_held and not changes_with_time(layer, still))]
+    for i, layer in drawn:
+        parts[f"layers[{i}] ({KINDS[layer.kind].describe(layer)})"] = _layer_seconds(layer, fog_mpx)
     if e.sun_through_fog:   # every layer again, along the sun's direction, and the attachment
         parts["effects.sun_through_fog"] = SUNLIGHT_S_PER_MPX * mpx + sum(
-            _layer_seconds(layer, fog_mpx) for layer in still.layers if layer.enabled)
-    if e.shafts > 0:
+            _layer_seconds(layer, fog_mpx) for _, layer in drawn)
+    if e.shafts > 0 and not fog_held:
         parts["effects.shafts"] = SHAFTS_S_PER_FOG_MPX * fog_mpx
-    filtered = jittered(still)
+    filtered = jittered_t(still) if fog_held else jittered(still)
     if filtered:   # passes/fog_filter.py
         parts["the filter of jittered samples (volume noise, shafts)"] = JITTER_FILTER_S_PER_FOG_MPX * fog_mpx
     n = still.noise

@@ -90,14 +90,17 @@ def init(backend: str, device: int | None, nice: int, cache_bytes: int, memory_b
 
 
 def _warm_up() -> None:
-    """Draw the default look once, small, with and without MSAA: builds the scene's
-    meshes and compiles the programs a first frame needs, so that the first client of a
-    new (or replaced) worker does not wait for them."""
+    """Draw the default look once, small, with and without MSAA, and as a stream's frames
+    while time runs over a still camera: builds the scene's meshes and compiles the
+    programs a first frame needs (and the held fog's, render/passes/fog.py), so that the
+    first client of a new (or replaced) worker does not wait for them."""
     from fogbank.model import presets
     from fogbank.model.params import StillParams
     still = StillParams.model_validate({**presets.preset_dict("default"), "width": 64, "height": 36})
     _renderer.render(still, slot="warm-up")
     _renderer.render(still, slot="warm-up", msaa=False)
+    for t in (0.1, 0.2):
+        _renderer.render(still.model_copy(update={"time": still.time + t}), slot="warm-up", hold_fog=True)
     _renderer.drop_slot("warm-up")
 
 
@@ -171,7 +174,7 @@ def frame(still, slot: str, msaa: bool, quality: int, show: str = "shaded", laye
         stats = None
         work = (r.programs.compiled, r.noise.baked)
         if show == "shaded":
-            img = r.render(still, slot=slot, msaa=msaa)
+            img = r.render(still, slot=slot, msaa=msaa, hold_fog=True)
         else:
             img, stats = teach.render(r, still, show, layer, slot=slot)
         t1 = time.perf_counter()
