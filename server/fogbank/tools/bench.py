@@ -248,16 +248,19 @@ def orbit_frames(r: Renderer, w: int, h: int, msaa: bool, n: int = 9) -> float:
     return _median(frame, n)
 
 
-def where_the_time_goes(r: Renderer, w: int = 1280, h: int = 720, n: int = 7) -> dict:
-    """The orbiting frame without MSAA, pass by pass (the GL finished after each), plus
-    read back and JPEG: median ms each."""
+def where_the_time_goes(r: Renderer, w: int = 1280, h: int = 720, n: int = 7, orbit: bool = True) -> dict:
+    """The orbiting frame without MSAA (or, `orbit` False, a stream's frame with the camera
+    still and time running: MSAA, the scene pass and the fog that does not move held), pass
+    by pass (the GL finished after each), plus read back and JPEG: median ms each."""
     from fogbank.render.passes import FRAME_PASSES
     still = _still("default", w, h)
     times: dict[str, list[float]] = {}
-    for i in range(n + 1):
-        s = still.model_copy(update={"time": 1.0 + i / 30, "camera": still.camera.model_copy(
-            update={"yaw": still.camera.yaw + 2.0 * (i + 1)})})
-        f = r.begin(s, "bench-orbit", False)
+    skip = 1 if orbit else 3   # a still camera's third frame is the first over the held fog
+    for i in range(n + skip):
+        s = still.model_copy(update={"time": 1.0 + i / 30})
+        if orbit:
+            s = s.model_copy(update={"camera": still.camera.model_copy(update={"yaw": still.camera.yaw + 2.0 * (i + 1)})})
+        f = r.begin(s, "bench-orbit" if orbit else "bench-still", not orbit, hold_fog=not orbit)
         for p in FRAME_PASSES:
             r.ctx.finish()
             t0 = time.perf_counter()
@@ -270,7 +273,8 @@ def where_the_time_goes(r: Renderer, w: int = 1280, h: int = 720, n: int = 7) ->
         t0 = time.perf_counter()
         encode(f.image, "jpg", 80)
         times.setdefault("JPEG q80", []).append((time.perf_counter() - t0) * 1000)
-    return {k: statistics.median(v[1:]) for k, v in times.items()}
+        r.keep_only(f)
+    return {k: statistics.median(v[skip:]) for k, v in times.items()}
 
 
 def workers_scaling(seconds: float, clients: int = 4) -> list[dict]:
@@ -306,6 +310,8 @@ def targets(r: Renderer, seconds: float, analytic: list[dict]) -> dict:
             print(f"    {w}x{h} {'MSAA' if msaa else 'no MSAA'}: {ms:.1f} ms")
     out["where_720p"] = where_the_time_goes(r)
     print("    720p no MSAA by pass: " + ", ".join(f"{k} {v:.1f}" for k, v in out["where_720p"].items()))
+    out["where_720p_still"] = where_the_time_goes(r, orbit=False)
+    print("    720p still camera by pass: " + ", ".join(f"{k} {v:.1f}" for k, v in out["where_720p_still"].items()))
     version = bench_vtk.available()
     if version:
         vt = [bench_vtk.orbit(w, h) for w, h in ((1280, 720), (640, 360))]
@@ -567,6 +573,11 @@ def targets_markdown(res: dict) -> list[str]:
     L += ["", "Where fogbank's orbiting 720p frame goes (no MSAA, the GL finished after each pass):", "",
           "| part | ms |", "|---|---|"]
     L += [f"| {k} | {ms:.1f} |" for k, ms in t["where_720p"].items()]
+    if t.get("where_720p_still"):
+        L += ["", "Where a 720p frame goes with the camera still and time running (a stream's full frame: "
+              "MSAA, the scene pass held, and the fog's time-invariant layers and shafts held with it, "
+              "render/passes/fog.py):", "", "| part | ms |", "|---|---|"]
+        L += [f"| {k} | {ms:.1f} |" for k, ms in t["where_720p_still"].items()]
     L += ["", "16 costly layers at 960x540 (tools/bench.py COSTLY): a slider dragged (interact on, a "
           "density change every 150 ms, time running), each change to the first frame that shows it:", "",
           "| look | p50 ms | p95 ms | max ms | previews px wide | render ms |" + (" before p95 ms |" if b else ""),
