@@ -57,7 +57,7 @@ class CompositePass(Pass):
             progs = [r.programs.get(FULLSCREEN, "passes/composite.frag", TWO_SURFACES=0, **defines)]
         if g.two_surfaces:
             progs.append(r.programs.get("passes/tiles.vert", "passes/composite.frag", TWO_SURFACES=1,
-                                        TILE=SILHOUETTE_TILE, **defines))
+                                        TILE=SILHOUETTE_TILE, HELD_NEAR=int(held), **defines))
             set_uniforms(progs[1], {"uViewport": np.array(f.targets.size, dtype=float)})
         uniforms = {
             "uFwd": v.fwd, "uRight": v.right, "uUp": v.up,
@@ -72,7 +72,7 @@ class CompositePass(Pass):
         for i, prog in enumerate(progs):
             # the held composite reads only the colours and the max opacity per frame
             set_uniforms(prog, {k: uniforms[k] for k in HELD_UNIFORMS} if held and i == 0 else uniforms)
-        if held:
+        if held:   # the held composite and, for the near surface, the two-surface draw
             for name, tex in zip(("uHeldA", "uHeldB", "uHeldW"), inputs.color_attachments):
                 tex.use(TEX[name])
         if mode == BLUR_MODES["single"]:

@@ -7,12 +7,16 @@
 // distance and the two are mixed by coverage, so a silhouette gets no outline.
 // Defined by the renderer: FOG_SCALE (1, 2, 4), BLUR_MODE (0 off, 1 fused here,
 // 2 separate passes follow), SUN_LIGHT (1: the G-buffer has the direct sunlight, to be
-// dimmed by the fog toward the sun) and TWO_SURFACES (0: every pixel's near surface;
-// 1: a second draw that redoes the pixels with a far surface, both mixed).
+// dimmed by the fog toward the sun), TWO_SURFACES (0: every pixel's near surface;
+// 1: a second draw that redoes the pixels with a far surface, both mixed) and HELD_NEAR
+// (1: the near surface from the held composite's inputs, render/passes/composite.py).
 #include "common/camera.glsl"
 #include "common/srgb.glsl"
 #include "fog/finish.glsl"
 #include "passes/composite_parts.glsl"
+#if HELD_NEAR
+#include "passes/composite_held.glsl"
+#endif
 in vec2 vUV;
 uniform sampler2D uColor;         // scene colour, linear (mipmapped when blurring: bilinear in the nearest level)
 uniform sampler2D uInvDist;       // full-resolution 1/distance
@@ -22,8 +26,6 @@ uniform sampler2D uFarColor;      // the pixel's far surface colour, linear; a: 
 uniform sampler2D uFarInvDist;    // its 1/distance
 uniform sampler2D uFarSunLight;   // its direct sunlight, linear
 uniform vec3 uFwd, uRight, uUp;
-uniform vec3 uFogColor;           // linear
-uniform vec3 uScatterColor;       // sun colour * intensity * scatter colour * scatter strength
 uniform float uSkyAffect;         // the share of its fog a sky pixel shows (Godot's sky affect)
 uniform float uBlurSigma;         // px at full fog
 uniform float uBlurExponent;
@@ -136,11 +138,15 @@ void main() {
 #endif
     vec2 full = vec2(textureSize(uColor, 0));
     vec3 w = viewRay(vUV * 2.0 - 1.0, uFwd, uRight, uUp);
+#if HELD_NEAR
+    vec4 c = heldNear(px);   // over a held fog, its kept inputs (passes/composite_held.glsl)
+#else
     vec3 sun = vec3(0.0);
 #if SUN_LIGHT
     sun = texelFetch(uSunLight, px, 0).rgb;
 #endif
     vec4 c = fogged(px, texelFetch(uColor, px, 0).rgb, sun, texelFetch(uInvDist, px, 0).r, w, full, false);
+#endif
 #if TWO_SURFACES
     vec3 farSun = vec3(0.0);
 #if SUN_LIGHT

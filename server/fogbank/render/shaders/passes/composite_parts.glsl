@@ -9,6 +9,8 @@ uniform float uScatterStart;      // m, Gawron's ScatterStartDist (eq. 5); 0 = t
 uniform bool uPhaseHG;            // the lobe: Henyey-Greenstein (true) or Gawron's power
 uniform float uAnisotropy;        // Henyey-Greenstein g
 uniform float uSkyDistance;       // m, how far a sky pixel's ray runs
+uniform vec3 uFogColor;           // linear
+uniform vec3 uScatterColor;       // sun colour * intensity * scatter colour * scatter strength
 
 // Depth-aware upsample (Biri 4.3; "nearest-depth" joint bilateral), in steps that the
 // held composite shares (passes/composite_inputs.frag keeps each pixel's weights). The

@@ -1,0 +1,30 @@
+// A pixel's near surface under the fog from the held composite's inputs
+// (passes/composite_inputs.frag): passes/composite.frag's fogged() for a still scene and
+// a held fog, in which only the fog texels' raw T and T toward the sun move, blended by
+// the kept upsample weights. Used by passes/composite_held.frag for every pixel, and by
+// the two-surface draw (passes/composite.frag HELD_NEAR) for the near surface.
+// Defined by the renderer: FOG_SCALE (1, 2, 4), SUN_LIGHT.
+uniform sampler2D uHeldA;         // (scene less direct sunlight, linear; in-scattering lobe x lit term)
+uniform sampler2D uHeldB;         // (direct sunlight, linear; the pixel's share of its fog)
+uniform sampler2D uHeldW;         // the four fog texels' upsample weights
+
+// (linear colour, T) of the pixel's near surface
+vec4 heldNear(ivec2 px) {
+    vec4 a = texelFetch(uHeldA, px, 0);
+    vec4 b = texelFetch(uHeldB, px, 0);
+#if FOG_SCALE == 1
+    vec2 Ts = texelFetch(uFog, px, 0).rb;
+#else
+    vec4 w = texelFetch(uHeldW, px, 0);
+    vec2 f;
+    ivec2 i0 = fogQuad(px, f);
+    vec2 Ts = w.x * fogTexelOf(i0, 0).rb + w.y * fogTexelOf(i0, 1).rb
+            + w.z * fogTexelOf(i0, 2).rb + w.w * fogTexelOf(i0, 3).rb;
+#endif
+    float T = 1.0 - b.a * (1.0 - fogFinish(Ts.x));   // the sky shows only its share of the fog
+    vec3 scene = a.rgb;
+#if SUN_LIGHT
+    scene += Ts.y * b.rgb;   // the scene less the share 1 - T_sun of its direct sunlight
+#endif
+    return vec4(T * scene + (1.0 - T) * (uFogColor + uScatterColor * a.a), T);
+}
