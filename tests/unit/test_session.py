@@ -399,3 +399,31 @@ def test_the_fog_the_worker_holds_over_a_still_camera_is_not_in_the_estimate():
     again = s.start_frame(1.5 + 2 * INPUT_SETTLE_S)
     assert again.estimate_ms == estimate(again.still, msaa=True, compiled=True, scene_cached=True,
                                          fog_held=True).seconds * 1000
+
+
+def test_only_full_frames_while_time_runs_ask_to_hold_the_fog():
+    """Found measuring issue 13: previews that held fog made a dragged 16-layer look build
+    held sums between its changes and compile their programs mid-drag (p95 111 -> 691 ms).
+    A frame asks its worker to hold fog only when it is full, time runs, it shows the look,
+    and the held programs compile fast (HOLD_COMPILE_S)."""
+    s = Session("a", now=0.0)
+    s.apply(msg('{"type": "view", "width": 960, "height": 540}'), 0.0)
+    s.cost_ratio = 0.5
+    job = s.start_frame(1.0)
+    assert job.full and job.hold_fog
+    s.frame_done(job, sent=False)
+    s.apply(msg('{"type": "interact", "active": true}'), 1.1)
+    job = s.start_frame(1.1)
+    assert not job.full and not job.hold_fog   # a preview
+    s.frame_done(job, sent=False)
+    s.apply(msg('{"type": "interact", "active": false}'), 1.1)
+    s.apply(msg('{"type": "play", "playing": false}'), 1.1)
+    job = s.start_frame(1.1 + 2 * INPUT_SETTLE_S)
+    assert job.full and not job.hold_fog       # time stands: nothing to hold for
+    s.frame_done(job, sent=False)
+    s.apply(msg('{"type": "play", "playing": true}'), 2.0)
+    terms = ",".join('{"amp": 0.1, "k": [1, %g, 0.2]}' % (0.5 * i) for i in range(8))
+    cosines = ",".join(['{"kind": "cosine", "terms": [%s]}' % terms] * 16)
+    s.apply(msg('{"type": "params", "params": {"layers": [%s]}}' % cosines), 2.0)
+    job = s.start_frame(2.0 + 2 * INPUT_SETTLE_S)
+    assert job.full and not job.hold_fog       # 16 cosine layers of 8 terms: slow to compile

@@ -14,7 +14,7 @@ from typing import Any
 
 from pydantic import ValidationError
 
-from fogbank.kinds.packing import split_by_time
+from fogbank.kinds.packing import split_by_time, variant
 from fogbank.model import errors
 from fogbank.model import presets as P
 from fogbank.model.params import FogParams, StillParams
@@ -72,6 +72,13 @@ REFINE_BUDGET_MS = 2000.0
 # 166), so its first frame is 720 px wide (at 0.1 s), and the next, calibrated, the full
 # look (at 0.3-0.4 s; at 1280x720 alike).
 PLAY_BUDGET_MS = 200.0
+# While time runs over a still camera, a full frame asks its worker to hold the fog's
+# time-invariant part with the scene pass (render/passes/fog.py), unless the two programs
+# that draws in would be slow to compile (cost.jit_seconds of each; the default look's are
+# estimated at 0.49 s, measured 90 ms): a held fog pays back in frames, and a compile of a
+# costly look (16 layers of cosines, 0.8 s estimated) is a stall that every session on the
+# worker waits for. Previews never ask: a look dragged changes at every few frames.
+HOLD_COMPILE_S = 0.6
 
 
 def _detailed(layer, detail: float):
@@ -102,6 +109,7 @@ class FrameJob:
     rung: int = 0          # its rung of PREVIEW_RUNGS
     estimate_ms: float = 0.0   # its estimated render time (workers/cost.py, uncalibrated)
     reduced: bool = False  # a refinement below the look's quality (Session._refinement)
+    hold_fog: bool = False  # the worker keeps the fog's time-invariant part (Session._holds_fog)
 
 
 class Session:
@@ -300,13 +308,23 @@ class Session:
         held_key): the layers that do not change with time, and the look's fog effects."""
         return (split_by_time(still)[0].layers, still.effects, still.density, still.noise)
 
+    def _holds_fog(self, still: StillParams) -> bool:
+        """Whether a full frame of `still` asks its worker to hold the fog's time-invariant
+        part: time runs, the frame shows the look, and the two programs it is drawn with
+        compile fast enough (HOLD_COMPILE_S)."""
+        from fogbank.workers.cost import jit_seconds
+        if not self.playing or self.showing() != "shaded":
+            return False
+        return sum(jit_seconds(variant(part)) for part in split_by_time(still)) <= HOLD_COMPILE_S
+
     def _fog_held(self, still: StillParams, msaa: bool) -> bool:
-        """Whether the worker holds this frame's time-invariant fog: the scene pass is held,
-        and so was the last frame's at this size, with the same time-invariant fog (the
-        worker draws it on the second frame over a held scene pass that asks for it, and
-        keeps it while it is asked for)."""
+        """Whether the worker holds this full frame's time-invariant fog: the frame asks for
+        it, its scene pass is held, and so was the last frame's at this size, which asked for
+        the same (the worker draws it on the second frame over a held scene pass that asks
+        for it, and keeps it while it is asked for)."""
         size = (still.width, still.height)
-        return self._scene_cached(still, msaa) and self.fogs.get(size) == self._held_fog_of(still)
+        return (self._scene_cached(still, msaa) and self.fogs.get(size) == self._held_fog_of(still)
+                and self._holds_fog(still))
 
     def _scene_cached(self, still: StillParams, msaa: bool) -> bool:
         """Whether the worker holds this frame's scene pass: the last frame at its size drew
@@ -314,10 +332,10 @@ class Session:
         drawn = self.scenes.get((still.width, still.height))
         return drawn is not None and drawn[0] == self._scene_of(still) and (drawn[1] or not msaa)
 
-    def _drew(self, still: StillParams, msaa: bool) -> None:
+    def _drew(self, still: StillParams, msaa: bool, hold_fog: bool = False) -> None:
         size, key = (still.width, still.height), self._scene_of(still)
         self.fogs.pop(size, None)
-        if self._scene_cached(still, msaa):   # the worker holds fog only over a held scene pass
+        if hold_fog and self._scene_cached(still, msaa):   # fog is held only over a held scene pass
             self.fogs[size] = self._held_fog_of(still)
             while len(self.fogs) > 2 * len(PREVIEW_RUNGS):
                 self.fogs.pop(next(iter(self.fogs)))
@@ -327,18 +345,19 @@ class Session:
             while len(self.scenes) > 2 * len(PREVIEW_RUNGS):
                 self.scenes.pop(next(iter(self.scenes)))
 
-    def _estimate_ms(self, still: StillParams, msaa: bool = False, held: bool = True) -> float:
+    def _estimate_ms(self, still: StillParams, msaa: bool = False, held: bool = True, full: bool = False) -> float:
         """The cost model's render time of a frame (workers/cost.py), uncalibrated, without
         what a worker does once (compiling a fog program, baking a noise tile): those are
         not this look's cost per frame; nor the scene pass while the worker holds it (a
         slider dragged, or time running, with the camera still: a playing look's full frame
         at 720p is a third of one with its scene drawn), nor, while time runs over a still
-        camera, the fog the worker holds (_fog_held); `held` False: the look's own cost,
-        the scene and the whole fog drawn (two looks compared are compared alike)."""
+        camera, the fog the worker holds for a `full` frame (_fog_held); `held` False: the
+        look's own cost, the scene and the whole fog drawn (two looks compared are compared
+        alike)."""
         from fogbank.workers.cost import estimate
         return estimate(still, msaa=msaa, compiled=True, baked=True,
                         scene_cached=held and self._scene_cached(still, msaa),
-                        fog_held=held and self._fog_held(still, msaa)).seconds * 1000.0
+                        fog_held=held and full and self._fog_held(still, msaa)).seconds * 1000.0
 
     def _recost(self, fog: FogParams, now: float) -> None:
         """On a new look whose estimate at the current rung differs from the last costed
@@ -375,7 +394,7 @@ class Session:
             return (still, i == 0) if i < 2 else (self._preview_still(fog, i - 2, now), False)
 
         def cost(i: int) -> float:
-            return self.cost_ratio * self._estimate_ms(*level(i))
+            return self.cost_ratio * self._estimate_ms(*level(i), full=True)
         want = next((i for i in range(n) if cost(i) <= budget), n - 1)
         keep = min(self.refine_level, n - 1)
         if (want > keep and cost(keep) <= 1.25 * budget) or (want < keep and cost(want) > 0.8 * budget):
@@ -396,8 +415,9 @@ class Session:
         else:
             still, msaa = self._refinement(fog, now)
             reduced = self.refine_level > 0
-            estimate_ms = self._estimate_ms(still, msaa=msaa)
-        self._drew(still, not preview and msaa)
+            estimate_ms = self._estimate_ms(still, msaa=msaa, full=True)
+        hold = not preview and self._holds_fog(still)
+        self._drew(still, not preview and msaa, hold)
         self.frame += 1
         self.making += 1
         self.last_start = now
@@ -408,7 +428,7 @@ class Session:
                         full=not preview, playing=self.playing, show=self.showing(), layer=v.layer,
                         scale=self.preview_scale if preview else 1.0,
                         rung=self.preview_rung if preview else 0,
-                        estimate_ms=estimate_ms, reduced=reduced)
+                        estimate_ms=estimate_ms, reduced=reduced, hold_fog=hold)
 
     def showing(self) -> str:
         """What the frames show: the view's choice, or the look while it asks for the

@@ -160,7 +160,8 @@ class Streamer:
         try:
             try:
                 out = await self.workers.call(slot, worker.frame, job.still, s.id, job.msaa, job.quality,
-                                              job.show, job.layer, deadline=self.settings.frame_deadline_s)
+                                              job.show, job.layer, job.hold_fog,
+                                              deadline=self.settings.frame_deadline_s)
                 slot.drew(cost.program_key(job.still))
             finally:
                 self.frames[slot.index] -= 1

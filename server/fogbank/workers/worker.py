@@ -162,8 +162,10 @@ def probe() -> dict[str, Any]:
     return _run(fn)
 
 
-def frame(still, slot: str, msaa: bool, quality: int, show: str = "shaded", layer: int = 0) -> dict[str, Any]:
-    """One stream frame as JPEG; `slot` names the session whose scene pass is cached.
+def frame(still, slot: str, msaa: bool, quality: int, show: str = "shaded", layer: int = 0,
+          hold_fog: bool = False) -> dict[str, Any]:
+    """One stream frame as JPEG; `slot` names the session whose scene pass is cached, and
+    `hold_fog` keeps its time-invariant fog with it (stream/session.py decides when).
     `show` other than "shaded" draws a view that teaches instead (render/teach.py), and
     its numbers and legend come back as "stats"."""
     from fogbank.render import teach
@@ -174,7 +176,7 @@ def frame(still, slot: str, msaa: bool, quality: int, show: str = "shaded", laye
         stats = None
         work = (r.programs.compiled, r.noise.baked)
         if show == "shaded":
-            img = r.render(still, slot=slot, msaa=msaa, hold_fog=True)
+            img = r.render(still, slot=slot, msaa=msaa, hold_fog=hold_fog)
         else:
             img, stats = teach.render(r, still, show, layer, slot=slot)
         t1 = time.perf_counter()
