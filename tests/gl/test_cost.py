@@ -89,3 +89,9 @@ def test_held_fog_leaves_out_the_layers_that_do_not_move_and_the_shafts():
     assert held.seconds < whole.seconds
     calm = look.model_copy(update={"wind": look.wind.model_copy(update={"speed": 0.0})})
     assert layers(cost.estimate(calm, scene_cached=True, fog_held=True)) == ["layers[2]", "layers[4]"]
+    # nothing moves: the held fog is the filtered fog target, no layer and no filter is drawn
+    still_noise = calm.model_copy(update={"layers": [look.layers[0], calm.layers[3].model_copy(),
+                                                     StillParams.model_validate({"layers": [
+                                                         {"kind": "noise", "mode": "volume"}]}).layers[0]]})
+    c = cost.estimate(still_noise, scene_cached=True, fog_held=True)
+    assert layers(c) == [] and not any(k.startswith("the filter") for k in c.parts)

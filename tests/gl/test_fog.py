@@ -173,3 +173,30 @@ def test_held_fog_counts_against_the_cache_and_goes_with_its_session(renderer):
     renderer.drop_slot("held-bytes")
     assert renderer.cache_bytes() <= before - h.nbytes()
     assert renderer.ctx.error == "GL_NO_ERROR"
+
+
+def test_where_nothing_moves_the_fog_target_itself_is_held(renderer):
+    """No wind and no simulated layer: every frame's fog is the same, so the held fog is
+    the frame's filtered fog target (no program compiled for it), and later frames draw no
+    fog: their texels are the reference's at each time, and a jittered look's (volume
+    noise, shafts) are the whole fog's filtered ones, to the bit."""
+    calm = {"wind": {"speed": 0.0}}
+    held = []
+    for i in range(4):
+        s = still(time=3.0 + 0.5 * i, **calm)
+        f = fog_pass(renderer, s, "held-whole")
+        check_against_reference(s, f)
+        held.append(f.held_fog is not None and f.held_fog.whole)
+    assert held == [False, False, True, True]
+    compiled = renderer.programs.compiled
+    noisy = dict(calm, layers=LOOK["layers"] + [{"kind": "noise", "mode": "volume", "density": 0.01, "samples": 8,
+                                                 "scale": 40.0}])
+    for i in range(4):
+        f = fog_pass(renderer, still(time=3.0 + 0.5 * i, **noisy), "held-whole")
+    assert f.held_fog.whole and f.filtered == {"T", "lit"}
+    got = fog_texels(f).copy()
+    whole = fog_texels(fog_pass(renderer, still(time=4.5, **noisy), "held-whole-ref", hold=False))
+    assert float(np.abs(got - whole).max()) == 0.0
+    assert renderer.programs.compiled - compiled <= 1   # the noisy look's own fog program, no held one
+    renderer.drop_slot("held-whole")
+    renderer.drop_slot("held-whole-ref")

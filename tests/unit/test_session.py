@@ -423,7 +423,12 @@ def test_only_full_frames_while_time_runs_ask_to_hold_the_fog():
     s.frame_done(job, sent=False)
     s.apply(msg('{"type": "play", "playing": true}'), 2.0)
     terms = ",".join('{"amp": 0.1, "k": [1, %g, 0.2]}' % (0.5 * i) for i in range(8))
-    cosines = ",".join(['{"kind": "cosine", "terms": [%s]}' % terms] * 16)
+    cosines = ",".join(['{"kind": "cosine", "terms": [%s]}' % terms] * 15)
     s.apply(msg('{"type": "params", "params": {"layers": [%s]}}' % cosines), 2.0)
     job = s.start_frame(2.0 + 2 * INPUT_SETTLE_S)
-    assert job.full and not job.hold_fog       # 16 cosine layers of 8 terms: slow to compile
+    assert job.full and job.hold_fog           # nothing moves: the fog target is held, nothing compiled
+    s.frame_done(job, sent=False)
+    windy = cosines + ',{"kind": "homogeneous", "density": 0.001, "wind": true}'
+    s.apply(msg('{"type": "params", "params": {"layers": [%s]}}' % windy), 3.0)
+    job = s.start_frame(3.0 + 2 * INPUT_SETTLE_S)
+    assert job.full and not job.hold_fog       # 15 cosine layers of 8 terms under a moving one: slow to compile

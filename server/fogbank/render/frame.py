@@ -9,7 +9,7 @@ from __future__ import annotations
 import threading
 from collections import OrderedDict
 from concurrent.futures import Future
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -102,7 +102,8 @@ class Frame:
     scene_cached: bool = False
     hold_fog: bool = False         # keep the fog's time-invariant part for the next frames (streams)
     held_fog: Any = None           # the held fog this frame's fog was drawn over (render/targets.py HeldFog)
-    lit_filtered: bool = False     # the fog target's lit share is already filtered (a held one)
+    # the fog target's channels already filtered ("T", "lit": a held fog's, passes/fog.py)
+    filtered: set = field(default_factory=set)
     raymarch_steps: int | None = None
     sun_view_proj: np.ndarray | None = None
     fog_tex: Any = None

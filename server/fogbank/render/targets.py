@@ -103,6 +103,7 @@ class HeldFog:
     sums: moderngl.Texture
     direct: moderngl.Texture | None
     filtered: tuple[moderngl.Framebuffer, moderngl.Texture] | None
+    whole: bool = False                 # `sums` holds the whole fog target, filtered (nothing moves)
     key: object = None
     # the held composite's inputs over this fog (passes/composite_inputs.frag): A, B, W at
     # the frame's size, and what drew them
@@ -160,11 +161,14 @@ class GBuffer:
     held: dict[int, HeldFog] = field(default_factory=dict)   # by fog scale
     fog_seen: dict[int, object] = field(default_factory=dict)   # the held-fog key of the last frame, by fog scale
 
-    def held_fog(self, ctx: moderngl.Context, scale: int, direct: bool, filtered: bool) -> HeldFog:
+    def held_fog(self, ctx: moderngl.Context, scale: int, direct: bool, filtered: bool,
+                 whole: bool = False) -> HeldFog:
         """The held fog's targets at `scale` with a tauDirect target (`direct`) and a
-        filtered copy (`filtered`), made anew when those differ from what it has."""
+        filtered copy (`filtered`), made anew when those differ from what it has; `whole`:
+        its target holds the whole fog."""
         h = self.held.get(scale)
         if h is not None and (h.direct is not None) == direct and (h.filtered is not None) == filtered:
+            h.whole = whole
             return h
         if h is not None:
             h.release()
@@ -180,7 +184,7 @@ class GBuffer:
         if filtered:
             t = tex(4)
             copy = (ctx.framebuffer(color_attachments=[t]), t)
-        self.held[scale] = HeldFog(fbo, sums, tau_direct, copy)
+        self.held[scale] = HeldFog(fbo, sums, tau_direct, copy, whole)
         return self.held[scale]
 
     def mipmaps(self) -> None:

@@ -73,11 +73,13 @@ REFINE_BUDGET_MS = 2000.0
 # look (at 0.3-0.4 s; at 1280x720 alike).
 PLAY_BUDGET_MS = 200.0
 # While time runs over a still camera, a full frame asks its worker to hold the fog's
-# time-invariant part with the scene pass (render/passes/fog.py), unless the two programs
-# that draws in would be slow to compile (cost.jit_seconds of each; the default look's are
-# estimated at 0.49 s, measured 90 ms): a held fog pays back in frames, and a compile of a
-# costly look (16 layers of cosines, 0.8 s estimated) is a stall that every session on the
-# worker waits for. Previews never ask: a look dragged changes at every few frames.
+# time-invariant part with the scene pass (render/passes/fog.py), unless some layers move
+# and the two programs the fog is then drawn in would be slow to compile (cost.jit_seconds
+# of each; the default look's are estimated at 0.49 s, measured 90 ms): a held fog pays
+# back in frames, and a compile of a costly look (16 layers of cosines, 0.8 s estimated)
+# is a stall that every session on the worker waits for. A look where nothing moves holds
+# its fog target itself and compiles nothing. Previews never ask: a look dragged changes
+# at every few frames.
 HOLD_COMPILE_S = 0.6
 
 
@@ -315,7 +317,9 @@ class Session:
         from fogbank.workers.cost import jit_seconds
         if not self.playing or self.showing() != "shaded":
             return False
-        return sum(jit_seconds(variant(part)) for part in split_by_time(still)) <= HOLD_COMPILE_S
+        parts = [variant(part) for part in split_by_time(still)]
+        # nothing moves: the worker holds the fog target itself, and compiles nothing
+        return not parts[1] or sum(jit_seconds(v) for v in parts) <= HOLD_COMPILE_S
 
     def _fog_held(self, still: StillParams, msaa: bool) -> bool:
         """Whether the worker holds this full frame's time-invariant fog: the frame asks for

@@ -102,7 +102,9 @@ def estimate(still: StillParams, msaa: bool = True, fmt: str = "jpg", scale: flo
             _layer_seconds(layer, fog_mpx) for _, layer in drawn)
     if e.shafts > 0 and not fog_held:
         parts["effects.shafts"] = SHAFTS_S_PER_FOG_MPX * fog_mpx
-    filtered = jittered_t(still) if fog_held else jittered(still)
+    # a held fog of moving layers filters its volume noise each frame; with none, the held
+    # fog is the filtered fog target itself
+    filtered = (jittered_t(still) and bool(drawn)) if fog_held else jittered(still)
     if filtered:   # passes/fog_filter.py
         parts["the filter of jittered samples (volume noise, shafts)"] = JITTER_FILTER_S_PER_FOG_MPX * fog_mpx
     n = still.noise

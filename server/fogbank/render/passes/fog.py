@@ -13,7 +13,7 @@ from fogbank.kinds import KINDS
 from fogbank.kinds.packing import loop_tables
 from fogbank.render.gl import TEX, set_uniforms
 from fogbank.render.passes.base import Pass
-from fogbank.render.passes.fog_filter import filter_fog
+from fogbank.render.passes.fog_filter import filter_fog, jittered_t
 
 
 def bind_fog(r, prog, plan) -> None:
@@ -34,21 +34,26 @@ def bind_fog(r, prog, plan) -> None:
     set_uniforms(prog, plan.uniforms)
 
 
-def held_key(f, plan) -> tuple:
-    """What a still camera's held fog (stage 1) depends on: the scene pass it was drawn
-    over, the fog scale, the time-invariant layers' plan, and the effects it reads."""
+def held_key(f, plan, whole: bool) -> tuple:
+    """What a still camera's held fog depends on: the scene pass it was drawn over, the fog
+    scale, the time-invariant layers' plan, the effects it reads, and whether it is the
+    whole fog (nothing moves) or the time-invariant sums under moving layers."""
     e = f.still.effects
-    return (f.gbuffer.scene_key, e.fog_scale, plan.signature(), e.sun_through_fog, e.shafts > 0, e.sky_distance)
+    return (f.gbuffer.scene_key, e.fog_scale, plan.signature(), e.sun_through_fog, e.shafts > 0, e.sky_distance,
+            whole)
 
 
 class FogPass(Pass):
-    """The whole fog per fog texel; or, for a stream whose camera stays still (the scene
-    pass held, Frame.hold_fog), in two stages (passes/fog.frag FOG_STAGE): the layers that
-    do not change with time, and the shafts' lit share (filtered as passes/fog_filter.py
-    does), are drawn once into sums held with the scene pass, and each frame draws only
-    the layers that move (wind, drift, particles) over them. The sums are built on the
-    second frame that asks for the same ones, so a look changed at every frame (a slider
-    dragged) draws the whole fog once, as before."""
+    """The whole fog per fog texel. For a stream whose camera stays still (the scene pass
+    held, Frame.hold_fog) the part that does not change with time is held with the scene
+    pass, built on the second frame that asks for the same one (so a look changed at every
+    frame, a slider dragged, draws the whole fog once, as before):
+    - where some layers move (wind, drift, particles), in two stages (passes/fog.frag
+      FOG_STAGE): the time-invariant layers' sums and the shafts' lit share (filtered as
+      passes/fog_filter.py does) are drawn once, and each frame draws only the moving
+      layers over them;
+    - where nothing moves, the frame's fog target itself, filtered, is held: later frames
+      draw no fog at all (and no program is compiled for it)."""
     name = "fog"
     reads = ("gbuffer.invdist", "gbuffer.held", "fog_plan", "view", "shadow_map")
     writes = ("fog", "gbuffer.held")
@@ -58,6 +63,9 @@ class FogPass(Pass):
         fbo, tex = f.targets.fog_target(e.fog_scale)
         plan = f.fog_plan()
         held = self._held(r, f, plan) if plan.split and not f.raymarch_steps else None
+        if held is not None and held.whole:
+            f.held_fog, f.fog_tex, f.filtered = held, held.texture, {"T", "lit"}
+            return
         fbo.use()
         if held is None:
             prog = r.programs.fog(plan.key, f.raymarch_steps, e.sun_through_fog, e.shafts > 0)
@@ -71,31 +79,39 @@ class FogPass(Pass):
                 held.direct.use(TEX["uHeldDirect"])
             self._draw(r, f, prog, moving, shafts=False)
             f.held_fog = held
-            f.lit_filtered = e.shafts > 0
+            f.filtered = {"lit"}
         f.fog_tex = tex
 
     def _held(self, r, f, plan):
         """The frame's held fog, drawn now if this is the second frame that asks for it;
         None: draw the whole fog (the first frame that asks)."""
         e, g = f.still.effects, f.gbuffer
-        still = plan.split[0]
-        key = held_key(f, still)
+        still, moving = plan.split
+        whole = not moving.key
+        key = held_key(f, still, whole)
         h = g.held.get(e.fog_scale)
         if h is not None and h.key == key:
             return h
         if g.fog_seen.get(e.fog_scale) != key:
             g.fog_seen[e.fog_scale] = key
             return None
-        direct = any(KINDS[k].log_transmittance is not None for k in still.packed.kinds)
+        direct = not whole and any(KINDS[k].log_transmittance is not None for k in still.packed.kinds)
         shafts = e.shafts > 0
         r.caches.park()   # held_fog may release targets: never the bound framebuffer
-        h = g.held_fog(r.ctx, e.fog_scale, direct, filtered=shafts)
+        h = g.held_fog(r.ctx, e.fog_scale, direct, filtered=shafts and not whole, whole=whole)
         h.key = None
-        h.fbo.use()
-        prog = r.programs.fog(still.key, None, e.sun_through_fog, shafts, stage=1, held_direct=direct)
-        self._draw(r, f, prog, still, shafts=shafts)
-        if shafts:   # the lit share, filtered once (passes/fog_filter.py: only it was sampled)
-            filter_fog(r, h.sums, h.filtered[0], filter_t=False, filter_lit=True)
+        if whole:   # the whole fog as a frame draws it, then its filter (or a copy) into the held target
+            fbo, tex = f.targets.fog_target(e.fog_scale)
+            fbo.use()
+            prog = r.programs.fog(plan.key, None, e.sun_through_fog, shafts)
+            self._draw(r, f, prog, plan, shafts=shafts)
+            filter_fog(r, tex, h.fbo, filter_t=jittered_t(f.still), filter_lit=shafts)
+        else:
+            h.fbo.use()
+            prog = r.programs.fog(still.key, None, e.sun_through_fog, shafts, stage=1, held_direct=direct)
+            self._draw(r, f, prog, still, shafts=shafts)
+            if shafts:   # the lit share, filtered once (passes/fog_filter.py: only it was sampled)
+                filter_fog(r, h.sums, h.filtered[0], filter_t=False, filter_lit=True)
         h.key = key
         return h
 

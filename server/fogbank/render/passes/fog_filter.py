@@ -39,9 +39,9 @@ class FogFilterPass(Pass):
     writes = ("fog",)
 
     def run(self, r, f) -> None:
-        filter_t = jittered_t(f.still)
-        # a held fog's lit share was filtered when it was drawn (passes/fog.py)
-        filter_lit = f.still.effects.shafts > 0 and not f.lit_filtered
+        # a held fog's channels were filtered when it was drawn (passes/fog.py)
+        filter_t = jittered_t(f.still) and "T" not in f.filtered
+        filter_lit = f.still.effects.shafts > 0 and "lit" not in f.filtered
         if not (filter_t or filter_lit):
             return
         fbo, tex = f.targets.fog_target(f.still.effects.fog_scale, 1)
