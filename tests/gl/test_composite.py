@@ -21,18 +21,22 @@ WINDY = [{"kind": "height", "density": 0.05, "falloff": 0.2, "base": 0.0},
 
 def held_frame(renderer, slot: str, msaa: bool = True):
     """Draw a look as a stream does while time runs and the camera stays, in a new slot:
-    two frames before, at earlier times, so that this one is drawn over the held fog and
-    (unless the blur is fused) the held composite's inputs (asserted)."""
+    three frames before, at earlier times (the third draws the held fog and the held
+    composite's inputs), so that this one reuses both as they were drawn for another time
+    (asserted; the fused blur keeps the full composite)."""
     def render(s: StillParams) -> np.ndarray:
         renderer.drop_slot(slot)
-        for dt in (-1.0, -0.5):
+        for dt in (-1.5, -1.0, -0.5):
             renderer.render(s.model_copy(update={"time": s.time + dt}), slot, msaa, hold_fog=True)
+        g = renderer.caches.gbuffer(slot, s.width, s.height, s.effects.sun_through_fog)
+        h = g.held[s.effects.fog_scale]
+        drawn = (h.key, h.inputs_key)
         f = renderer.begin(s, slot, msaa, hold_fog=True)
         for p in FRAME_PASSES:
             p.run(renderer, f)
         renderer.keep_only(f)
-        assert f.held_fog is not None
-        assert (f.held_fog.inputs_key is not None) == (s.effects.blur != "single")
+        assert f.held_fog is h and (h.key, h.inputs_key) == drawn   # reused, not drawn again
+        assert (h.inputs_key is not None) == (s.effects.blur != "single")
         image = f.image
         renderer.drop_slot(slot)
         return image

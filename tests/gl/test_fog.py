@@ -85,6 +85,9 @@ def check_against_reference(s: StillParams, f) -> None:
     assert float(np.abs(fog[..., 0].ravel() - want).max()) <= 2e-4
     assert float(np.ptp(want)) > 0.3   # the layers are in view: the check has teeth
     ground = invd > 0
+    if not s.effects.sun_through_fog:   # no fog toward the sun: T_sun is 1 everywhere
+        assert np.all(fog[..., 2] == 1.0)
+        return
     P = eye[ground] + dirs[ground] * d[ground, None]
     L = np.broadcast_to(s.sun.direction(), P.shape)
     sun_want = reference(toward_the_sun(s.fog()), P, L, np.full(len(P), s.effects.sky_distance), s.time)
@@ -136,6 +139,9 @@ def test_a_still_camera_holds_the_fog_that_does_not_move_and_each_frame_matches_
     {"effects": dict(LOOK["effects"], sky_distance=300.0)},
     {"density": 0.5},
     {"wind": {"speed": 0.0}},   # the wind-sensitive layers stop: they join the held ones
+    {"effects": dict(LOOK["effects"], cutoff_distance=150.0, cutoff_mode="fog")},
+    {"effects": dict(LOOK["effects"], sun_through_fog=False)},
+    {"layers": [dict(LOOK["layers"][0], enabled=False)] + LOOK["layers"][1:]},
 ])
 def test_a_change_is_never_drawn_over_stale_held_fog(renderer, change):
     for i in range(3):
@@ -169,9 +175,15 @@ def test_held_fog_counts_against_the_cache_and_goes_with_its_session(renderer):
     # and the composite's three RGBA16F inputs at full size
     assert h.nbytes() == fw * fh * (16 + 16 + 4) + W * H * 24
     assert f.gbuffer.nbytes() >= h.nbytes()
+    moved = fog_pass(renderer, still(time=6.0, camera=dict(LOOK["camera"], yaw=40.0)), "held-bytes")
+    assert moved.gbuffer is f.gbuffer and f.gbuffer.held == {}   # the scene drawn anew: its held fog went
+    assert renderer.ctx.error == "GL_NO_ERROR"
+    for i in range(3):
+        f = fog_pass(renderer, still(time=7.0 + i), "held-bytes")
+    CompositePass().run(renderer, f)
     before = renderer.cache_bytes()
     renderer.drop_slot("held-bytes")
-    assert renderer.cache_bytes() <= before - h.nbytes()
+    assert renderer.cache_bytes() <= before - f.held_fog.nbytes()
     assert renderer.ctx.error == "GL_NO_ERROR"
 
 

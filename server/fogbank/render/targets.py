@@ -207,10 +207,15 @@ class GBuffer:
     def tiles(self) -> moderngl.Texture:
         return self.tiles_fbo.color_attachments[0]
 
-    def release(self) -> None:
+    def drop_held(self) -> None:
+        """Release the held fog (its scene pass is about to be drawn anew)."""
         for h in self.held.values():
             h.release()
         self.held.clear()
+        self.fog_seen.clear()
+
+    def release(self) -> None:
+        self.drop_held()
         release_fbo(self.tiles_fbo)
         self.resolve_fbo.release()   # its attachments are the near textures (released with fbo) and the far ones
         for tex in (self.far_color, self.far_invdist, self.far_sunlight):

@@ -142,8 +142,9 @@ class Session:
         # the scene pass this session's worker holds at each frame size: (scene, camera, sun,
         # sunlight target) and whether with MSAA (render/targets.py keeps one per slot and size)
         self.scenes: dict[tuple[int, int], tuple[tuple, bool]] = {}
-        # the held-fog key of the last frame at each size (_held_fog_of; render/passes/fog.py)
-        self.fogs: dict[tuple[int, int], tuple] = {}
+        # at each size, the held-fog key of the last frame (_held_fog_of; render/passes/fog.py)
+        # and how many frames in a row asked for it over a held scene pass
+        self.fogs: dict[tuple[int, int], tuple[tuple, int]] = {}
         self.fog = FogParams.model_validate(P.preset_dict("default"))
         self._base_sim = self.fog.time
         self._base_wall = now
@@ -307,8 +308,10 @@ class Session:
     @staticmethod
     def _held_fog_of(still: StillParams) -> tuple:
         """What the fog a worker holds over a still scene pass depends on (render/passes/fog.py
-        held_key): the layers that do not change with time, and the look's fog effects."""
-        return (split_by_time(still)[0].layers, still.effects, still.density, still.noise)
+        held_key): the layers that do not change with time, the look's fog effects, and
+        whether any layer moves (the worker then holds sums, else the fog target itself)."""
+        held, moving = split_by_time(still)
+        return (held.layers, bool(moving.layers), still.effects, still.density, still.noise)
 
     def _holds_fog(self, still: StillParams) -> bool:
         """Whether a full frame of `still` asks its worker to hold the fog's time-invariant
@@ -322,12 +325,13 @@ class Session:
         return not parts[1] or sum(jit_seconds(v) for v in parts) <= HOLD_COMPILE_S
 
     def _fog_held(self, still: StillParams, msaa: bool) -> bool:
-        """Whether the worker holds this full frame's time-invariant fog: the frame asks for
-        it, its scene pass is held, and so was the last frame's at this size, which asked for
-        the same (the worker draws it on the second frame over a held scene pass that asks
-        for it, and keeps it while it is asked for)."""
+        """Whether the worker draws this full frame over a held fog it drew before: the frame
+        asks for it, its scene pass is held, and the last two frames at this size asked for
+        the same over a held scene pass (the worker's first such frame marks the held fog
+        seen, its second draws it, in full and more; the third is the first that saves)."""
         size = (still.width, still.height)
-        return (self._scene_cached(still, msaa) and self.fogs.get(size) == self._held_fog_of(still)
+        key, frames = self.fogs.get(size, (None, 0))
+        return (frames >= 2 and self._scene_cached(still, msaa) and key == self._held_fog_of(still)
                 and self._holds_fog(still))
 
     def _scene_cached(self, still: StillParams, msaa: bool) -> bool:
@@ -338,9 +342,10 @@ class Session:
 
     def _drew(self, still: StillParams, msaa: bool, hold_fog: bool = False) -> None:
         size, key = (still.width, still.height), self._scene_of(still)
-        self.fogs.pop(size, None)
+        last, frames = self.fogs.pop(size, (None, 0))
         if hold_fog and self._scene_cached(still, msaa):   # fog is held only over a held scene pass
-            self.fogs[size] = self._held_fog_of(still)
+            fog = self._held_fog_of(still)
+            self.fogs[size] = (fog, frames + 1 if fog == last else 1)
             while len(self.fogs) > 2 * len(PREVIEW_RUNGS):
                 self.fogs.pop(next(iter(self.fogs)))
         if not self._scene_cached(still, msaa) or msaa:

@@ -255,7 +255,7 @@ def where_the_time_goes(r: Renderer, w: int = 1280, h: int = 720, n: int = 7, or
     from fogbank.render.passes import FRAME_PASSES
     still = _still("default", w, h)
     times: dict[str, list[float]] = {}
-    skip = 1 if orbit else 3   # a still camera's third frame is the first over the held fog
+    skip = 1 if orbit else 3   # a still camera's third frame draws the held fog, the fourth reuses it
     for i in range(n + skip):
         s = still.model_copy(update={"time": 1.0 + i / 30})
         if orbit:

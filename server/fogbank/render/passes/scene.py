@@ -41,11 +41,14 @@ def lod_levels(nearest: np.ndarray, error: np.ndarray, fov: float, height: int) 
 class ScenePass(Pass):
     name = "scene"
     reads = ("meshes", "shadow_map", "lightmap", "view")
-    writes = ("scene_target",)
+    writes = ("scene_target", "gbuffer.held")
 
     def run(self, r, f) -> None:
         if f.scene_cached:
             return
+        if f.gbuffer.held:   # a fog held over the scene pass drawn before goes with it
+            r.caches.park()   # never release the bound framebuffer's attachments
+            f.gbuffer.drop_held()
         look, view = f.still, f.view
         mesh = r.meshes.get(look.scene)
         target = scene_target(f)
