@@ -145,6 +145,7 @@ class Session:
         # at each size, the held-fog key of the last frame (_held_fog_of; render/passes/fog.py)
         # and how many frames in a row asked for it over a held scene pass
         self.fogs: dict[tuple[int, int], tuple[tuple, int]] = {}
+        self._splits: list[tuple] = []   # (layers, wind, _split's answer), newest first
         self.fog = FogParams.model_validate(P.preset_dict("default"))
         self._base_sim = self.fog.time
         self._base_wall = now
@@ -305,24 +306,33 @@ class Session:
     def _scene_of(still: StillParams) -> tuple:
         return (still.scene, still.camera, still.sun, still.effects.sun_through_fog)
 
-    @staticmethod
-    def _held_fog_of(still: StillParams) -> tuple:
+    def _split(self, still: StillParams) -> tuple[tuple, bool]:
+        """The look's layers split by time (kinds/packing.py split_by_time): the held layers
+        and whether any moves, and whether the two programs it is then drawn with compile
+        fast enough (HOLD_COMPILE_S; a look where nothing moves compiles nothing). Kept
+        for the last few layer lists: the estimates ask several times a frame."""
+        from fogbank.workers.cost import jit_seconds
+        for layers, wind, out in self._splits:
+            if layers is still.layers and wind == still.wind:
+                return out
+        held, moving = split_by_time(still)
+        parts = [variant(held), variant(moving)]
+        out = ((held.layers, bool(moving.layers)),
+               not parts[1] or sum(jit_seconds(v) for v in parts) <= HOLD_COMPILE_S)
+        self._splits = [(still.layers, still.wind, out)] + self._splits[:3]
+        return out
+
+    def _held_fog_of(self, still: StillParams) -> tuple:
         """What the fog a worker holds over a still scene pass depends on (render/passes/fog.py
         held_key): the layers that do not change with time, the look's fog effects, and
         whether any layer moves (the worker then holds sums, else the fog target itself)."""
-        held, moving = split_by_time(still)
-        return (held.layers, bool(moving.layers), still.effects, still.density, still.noise)
+        return (*self._split(still)[0], still.effects, still.density, still.noise)
 
     def _holds_fog(self, still: StillParams) -> bool:
         """Whether a full frame of `still` asks its worker to hold the fog's time-invariant
         part: time runs, the frame shows the look, and the two programs it is drawn with
         compile fast enough (HOLD_COMPILE_S)."""
-        from fogbank.workers.cost import jit_seconds
-        if not self.playing or self.showing() != "shaded":
-            return False
-        parts = [variant(part) for part in split_by_time(still)]
-        # nothing moves: the worker holds the fog target itself, and compiles nothing
-        return not parts[1] or sum(jit_seconds(v) for v in parts) <= HOLD_COMPILE_S
+        return self.playing and self.showing() == "shaded" and self._split(still)[1]
 
     def _fog_held(self, still: StillParams, msaa: bool) -> bool:
         """Whether the worker draws this full frame over a held fog it drew before: the frame
