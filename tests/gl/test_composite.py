@@ -110,3 +110,25 @@ def test_an_effect_changed_over_held_fog_redraws_the_held_inputs(renderer, chang
     assert int(np.abs(held - full).max()) <= 1
     assert int(np.abs(old - full).max()) > 3   # the effect shows: the check has teeth
     renderer.drop_slot("full-change")
+
+
+@pytest.mark.parametrize("camera,layers,objects", [
+    # 700 m up, looking down through height fog, a sphere and a drifting cosine below
+    ({"position": (2.0, 700.0, -73.0), "yaw": 0.0, "pitch": -89.0, "fov": 10.0},
+     [{"kind": "height", "density": 0.01, "falloff": 0.01, "base": 0.0},
+      {"kind": "sphere", "center": (-40.0, 200.0, -90.0), "radius": 60.0, "density": 0.01},
+      {"kind": "cosine", "density": 0.002, "c0": 1.0, "scale": 30.0, "wind": True,
+       "terms": [{"amp": 0.9, "k": (0.3, 1.1, 0.2), "phase": 0.5}]}],
+     {0, 1, 2, 3, 4}),
+    # 12.7 km from the origin at a late time (test_renderer's far camera), held and moving layers
+    ({"position": (9000.0, 30.0, -9000.0), "yaw": -90.0, "pitch": 4.0, "fov": 60.0},
+     [{"kind": "sphere", "center": (8940.0, 34.0, -9003.0), "radius": 25.0, "density": 0.03},
+      {"kind": "cosine", "density": 0.004, "c0": 1.0, "scale": 3.0, "wind": True,
+       "terms": [{"amp": 0.9, "k": (0.3, 1.1, 0.2), "phase": 0.5}]},
+      {"kind": "height", "density": 0.002, "falloff": 0.05, "base": 20.0}],
+     {-1}),
+])
+def test_held_frames_from_high_and_far_cameras_at_a_late_time(renderer, camera, layers, objects):
+    still = calibration_still(layers=layers, camera=camera, time=3.7e5,
+                              effects={"scatter": 0.0, "sky_distance": 300.0})
+    assert check_pixels(renderer, still, min_share=0.6, render=held_frame(renderer, "held-far")) == objects
