@@ -41,10 +41,10 @@ def changes_with_time(layer, fog) -> bool:
 def split_by_time(fog) -> tuple:
     """The look as two: its enabled layers that do not change with time, and the others
     (each a copy of the look with only those layers, in their order)."""
-    layers = [layer for _, layer in enabled(fog)]
-    still = [layer for layer in layers if not changes_with_time(layer, fog)]
-    moving = [layer for layer in layers if changes_with_time(layer, fog)]
-    return fog.model_copy(update={"layers": still}), fog.model_copy(update={"layers": moving})
+    parts: tuple[list, list] = ([], [])
+    for _, layer in enabled(fog):
+        parts[changes_with_time(layer, fog)].append(layer)
+    return tuple(fog.model_copy(update={"layers": part}) for part in parts)
 
 
 def variant(fog) -> tuple:

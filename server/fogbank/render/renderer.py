@@ -57,11 +57,11 @@ class Renderer:
         key = (still.scene, still.camera, still.sun, msaa)
         # a preview happily reuses a full-quality scene pass
         cached = g.scene_key == key or (not msaa and g.scene_key == key[:3] + (True,))
-        hold = hold_fog and cached
-        plan = self._prep.submit(plan_fog, still, still.time, view.eye, self.sims, hold)
+        # the plan's split (FogPlan.split) is what asks the fog pass to hold
+        plan = self._prep.submit(plan_fog, still, still.time, view.eye, self.sims, hold_fog and cached)
         return Frame(still=still, slot=slot, msaa=msaa, view=view,
                      targets=self.caches.targets(w, h), gbuffer=g, plan=plan,
-                     scene_key=key, scene_cached=cached, hold_fog=hold)
+                     scene_key=key, scene_cached=cached)
 
     def render(self, still, slot: str = "still", msaa: bool = True, hold_fog: bool = False) -> np.ndarray:
         """The frame as (height, width, 3) uint8 sRGB, top row first. `slot` names whose

@@ -45,9 +45,10 @@ def held_key(f, plan, whole: bool) -> tuple:
 
 class FogPass(Pass):
     """The whole fog per fog texel. For a stream whose camera stays still (the scene pass
-    held, Frame.hold_fog) the part that does not change with time is held with the scene
-    pass, built on the second frame that asks for the same one (so a look changed at every
-    frame, a slider dragged, draws the whole fog once, as before):
+    held; Renderer.begin(hold_fog) gives the plan its FogPlan.split) the part that does not
+    change with time is held with the scene pass, built on the second frame that asks for
+    the same one (so a look changed at every frame, a slider dragged, draws the whole fog
+    once, as before):
     - where some layers move (wind, drift, particles), in two stages (passes/fog.frag
       FOG_STAGE): the time-invariant layers' sums and the shafts' lit share (filtered as
       passes/fog_filter.py does) are drawn once, and each frame draws only the moving
