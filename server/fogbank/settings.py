@@ -20,9 +20,10 @@ class Settings(BaseSettings):
     gl_device: int | None = Field(None, ge=0, description="EGL device index; unset picks the first")
     workers: int = Field(1, ge=1, le=64, description="interactive render worker processes (stream "
                          "frames, cheap stills), each with its own GL context")
-    frames_per_worker: int = Field(1, ge=1, le=8, description="stream frames queued on one "
-                                   "interactive worker at once (2 hides the hand-over between "
-                                   "frames, at up to a frame of latency)")
+    frames_per_worker: int = Field(1, ge=1, le=8, description="stream frames on one "
+                                   "interactive worker at once when the next is a preview; a "
+                                   "frame of a stream that only plays may queue one more "
+                                   "(stream/streaming.py Streamer.queue_room)")
     batch_workers: int = Field(1, ge=0, le=64, description="batch render worker processes (costly "
                                "stills, transmittance); 0 runs everything on the interactive ones")
     batch_nice: int = Field(10, ge=0, le=19, description="CPU niceness of batch workers")

@@ -4,7 +4,7 @@ workers among sessions, and the /ws endpoint.
 Each session is pinned to one interactive worker (the one with the fewest sessions), so
 its cached scene pass stays where its frames are drawn. The scheduler starts a frame for
 the next due session in round-robin order, with at most `frames_per_worker` frames on
-each worker (one: a second queued frame would only add a frame of latency). Each frame
+each worker (and one more for a stream that only plays: Streamer.queue_room). Each frame
 is a snapshot of its session (latest wins); the worker renders and JPEG-encodes it, and
 the bytes go out as header + JPEG. A session never has more than MAX_IN_FLIGHT frames
 unacknowledged, so a slow client gets fewer frames, never older ones.
@@ -119,6 +119,16 @@ class Streamer:
         except Exception:  # noqa: BLE001 - a dead worker has nothing left to free
             pass
 
+    def queue_room(self, session: Session, now: float) -> int:
+        """How many frames may be on the worker when one of `session`'s starts: one more
+        than `frames_per_worker` unless the session previews. A frame queued behind the
+        one being drawn starts the moment that one ends, so the worker never idles through
+        the hand-over between frames (the result's trip to this process, the next job's
+        back: 4-6 ms a frame here); it costs a frame of latency, which a stream that only
+        plays (the camera still, time running) does not feel, and a drag does: previews
+        never queue behind another frame."""
+        return self.frames_per_worker + (0 if session.previewing(now) else 1)
+
     def _pick(self, now: float) -> tuple[Client | None, float | None]:
         """The next due client (whose worker has room) in round-robin order, else when
         the earliest one is due."""
@@ -126,7 +136,7 @@ class Streamer:
         soonest = None
         for i in range(len(clients)):
             c = clients[(self._rr + i) % len(clients)]
-            if self.frames.get(c.slot.index, 0) >= self.frames_per_worker:
+            if self.frames.get(c.slot.index, 0) >= self.queue_room(c.session, now):
                 continue   # a finished frame wakes the scheduler
             due = c.session.next_due(now)
             if due is None:

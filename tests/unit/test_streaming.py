@@ -1,0 +1,62 @@
+"""The scheduler's choice of the next frame (stream/streaming.py), with a hand-driven clock
+and no worker: a stream that only plays keeps a second frame queued on its worker, a
+preview never waits behind one."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+from fogbank.stream.protocol import parse
+from fogbank.stream.session import Session
+from fogbank.stream.streaming import Client, Streamer
+
+
+def _streamer(frames_per_worker=1):
+    st = Streamer(workers=None, frames_per_worker=frames_per_worker)
+    s = Session("a", now=0.0)
+    s.apply(parse('{"type": "view", "width": 64, "height": 64, "fps": 120}'), 0.0)
+    c = Client(s, ws=None, addr="127.0.0.1", now=0.0)
+    c.slot = SimpleNamespace(index=0)
+    st.clients[s.id] = c
+    return st, c
+
+
+def _start(st, c, now):
+    """What Streamer._run does with a picked client, without the worker."""
+    picked, _ = st._pick(now)
+    if picked is None:
+        return None
+    job = picked.session.start_frame(now)
+    st.frames[c.slot.index] = st.frames.get(c.slot.index, 0) + 1
+    return job
+
+
+def test_a_playing_stream_keeps_a_second_frame_queued_on_its_worker():
+    st, c = _streamer()
+    first = _start(st, c, 0.0)
+    second = _start(st, c, 0.01)
+    assert (first.frame, second.frame) == (1, 2)
+    assert _start(st, c, 0.02) is None          # two on the worker: the queue is full
+    st.frames[0] -= 1                           # the first is drawn, sent and acknowledged
+    c.session.frame_done(first, sent=True)
+    c.session.apply(parse('{"type": "ack", "frame": 1}'), 0.03)
+    assert _start(st, c, 0.03).frame == 3       # queued while the second is drawn
+
+
+def test_a_preview_never_waits_behind_another_frame():
+    st, c = _streamer()
+    c.session.apply(parse('{"type": "interact", "active": true}'), 0.0)
+    first = _start(st, c, 0.0)
+    assert first.full is False
+    assert _start(st, c, 0.01) is None          # one on the worker: a preview waits for it
+    st.frames[0] -= 1
+    c.session.frame_done(first, sent=True)
+    c.session.apply(parse('{"type": "ack", "frame": 1}'), 0.02)
+    assert _start(st, c, 0.02).frame == 2
+
+
+def test_frames_per_worker_sets_the_depth_and_playing_adds_one():
+    st, c = _streamer(frames_per_worker=2)
+    assert st.queue_room(c.session, 0.0) == 3
+    c.session.apply(parse('{"type": "interact", "active": true}'), 0.0)
+    assert st.queue_room(c.session, 0.0) == 2
