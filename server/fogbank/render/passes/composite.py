@@ -58,7 +58,7 @@ class CompositePass(Pass):
         if g.two_surfaces:
             progs.append(r.programs.get("passes/tiles.vert", "passes/composite.frag", TWO_SURFACES=1,
                                         TILE=SILHOUETTE_TILE, HELD_NEAR=int(held), **defines))
-            set_uniforms(progs[1], {"uViewport": np.array(f.targets.size, dtype=float)})
+            set_uniforms(progs[1], {"uViewport": np.array(f.targets.size, dtype=float), "uTileCols": g.tiles.width})
         uniforms = {
             "uFwd": v.fwd, "uRight": v.right, "uUp": v.up,
             "uFogColor": np.array(srgb_to_linear(look.fog_color)),
@@ -93,8 +93,10 @@ class CompositePass(Pass):
             f.targets.out.use()
         r.programs.draw(progs[0], moderngl.TRIANGLES)
         if g.two_surfaces:
-            g.tiles.use(TEX["uTiles"])
-            r.programs.draw(progs[1], moderngl.TRIANGLES, vertices=6, instances=g.tiles.width * g.tiles.height)
+            tiles, count = g.silhouette_tiles(r.ctx)
+            if count:
+                tiles.use(TEX["uTiles"])
+                r.programs.draw(progs[1], moderngl.TRIANGLES, vertices=6, instances=count)
 
     @staticmethod
     def _held_inputs(r, f, defines: dict):

@@ -39,4 +39,5 @@ class ResolvePass(Pass):
         g.far_color.use(TEX["uFarColor"])
         g.tiles_fbo.use()
         r.programs.draw(tiles, moderngl.TRIANGLES)
+        g.tile_count = -1   # listed when the composite first asks (GBuffer.silhouette_tiles)
         g.two_surfaces = True
