@@ -1,4 +1,5 @@
-"""The countryside's far skirt (scene/meshes.py) against the detailed terrain grid."""
+"""The countryside's terrain (scene/meshes.py): the far skirt against the detailed grid, and
+the chunks' levels of detail with their skirts."""
 
 from __future__ import annotations
 
@@ -55,28 +56,100 @@ def _border_edges(tri: np.ndarray) -> set[tuple[int, int]]:
     return {tuple(e) for e in uniq[counts == 1].tolist()}
 
 
-def test_every_level_of_detail_tiles_each_chunk_and_keeps_its_full_border():
-    """At strides 2 and 4 (meshes.LOD_STRIDES) each chunk's triangles cover its square once
-    (areas sum to it, none degenerate, all wound as the grid's), and its outline is the
-    grid's own, every grid vertex on it: chunks drawn at different levels meet without a
-    crack, and the far land (fanned onto the grid's edge) still meets them."""
+def _levels(m, k: int):
+    """Chunk k's (cells, skirt) index arrays at each level of detail."""
+    row = m.terrain_chunks[k].astype(int)
+    f0, c0 = m.terrain_skirt0[k].astype(int)
+    out = [(m.terrain_indices[row[0]:row[0] + row[1]], m.terrain_indices[f0:f0 + c0])]
+    for level in range(1, len(meshes.LOD_STRIDES)):
+        f, c = row[4 + 2 * level], row[5 + 2 * level]
+        cut = c - int(m.terrain_skirts[k, level])
+        out.append((m.terrain_indices[f:f + cut], m.terrain_indices[f + cut:f + c]))
+    assert int(m.terrain_skirts[k, 0]) == len(out[0][1])
+    return out
+
+
+def test_every_level_of_detail_tiles_each_chunk_and_hangs_a_skirt_from_its_border():
+    """At every level (meshes.LOD_STRIDES) each chunk's cells cover its square once (areas
+    sum to it, none degenerate, all wound as the grid's) and are coarser than the level
+    before; its skirt hangs from every edge of that level's outline, straight down to
+    copies of the outline's vertices, all lowered by one depth, whose material (4) is the
+    one the scene program never turns to face the eye."""
     m = meshes.build("countryside")
     n = meshes.TERRAIN_CELLS
     verts = m.terrain_vertices
+    grid = n * n
     cell = 2 * terrain.EXTENT / (n - 1)
     fine_sign = np.sign(_signed_areas(verts, m.terrain_indices[:6]))[0]
-    for first, count, *_, f2, c2, f4, c4 in m.terrain_chunks.astype(int):
-        fine = m.terrain_indices[first:first + count]
-        outline = _border_edges(fine)
-        square = np.abs(_signed_areas(verts, fine)).sum()
-        for f, c in ((f2, c2), (f4, c4)):
-            coarse = m.terrain_indices[f:f + c]
-            areas = _signed_areas(verts, coarse)
+    assert len(m.terrain_chunks) == meshes.CHUNKS ** 2
+    for k in range(len(m.terrain_chunks)):
+        levels = _levels(m, k)
+        square = np.abs(_signed_areas(verts, levels[0][0])).sum()
+        depths = set()
+        for level, (cells, skirt) in enumerate(levels):
+            areas = _signed_areas(verts, cells)
             assert bool(np.all(np.sign(areas) == fine_sign)) == True   # noqa: E712
-            assert float(np.abs(areas).min()) > 0.25 * cell * cell
+            assert float(np.abs(areas).min()) > 0.49 * cell * cell   # half a grid cell at least
             assert float(np.abs(areas).sum()) == pytest.approx(float(square), rel=1e-6)
-            assert _border_edges(coarse) == outline
-            assert c < count / 2.5
+            if level:
+                assert len(cells) < len(levels[level - 1][0])
+            tri = skirt.reshape(-1, 3).astype(np.int64)
+            low = tri[:, 2]
+            assert bool(np.all(low >= grid)) and bool(np.all(tri[:, 0] < grid)) == True   # noqa: E712
+            assert bool(np.all(verts[low, 9] == meshes.SKIRT_MATERIAL)) == True   # noqa: E712
+            tops = {tuple(sorted(e)) for e in tri[0::2, :2].tolist()}
+            assert tops == _border_edges(cells)
+            # each lowered vertex under its own grid vertex: the one it pairs with
+            for top, lowered in ((tri[0::2, 1], tri[0::2, 2]), (tri[1::2, 0], tri[1::2, 2])):
+                assert np.array_equal(verts[top][:, [0, 2]], verts[lowered][:, [0, 2]])
+                assert np.array_equal(verts[top][:, 3:6], verts[lowered][:, 3:6])
+                depths |= set(np.round(verts[top, 1] - verts[lowered, 1], 4).tolist())
+        assert len(depths) == 1 and min(depths) > 0.0
+
+
+def _chunk_at(x: float, z: float) -> int:
+    n = meshes.TERRAIN_CELLS
+    i = int(round((x + terrain.EXTENT) / (2 * terrain.EXTENT) * (n - 1)))
+    j = int(round((z + terrain.EXTENT) / (2 * terrain.EXTENT) * (n - 1)))
+    for k, (i0, i1, j0, j1) in enumerate(meshes._chunk_ranges(n)):
+        if i0 <= i < i1 and j0 <= j < j1:
+            return k
+    raise AssertionError((x, z))
+
+
+def test_a_skirt_reaches_below_its_neighbour_at_any_two_levels():
+    """Where two chunks meet, at every grid vertex of their shared border and for every two
+    levels they may be drawn at, the height of each side's cells there (found by search in
+    world coordinates): the higher side's skirt reaches at least down to the lower side,
+    so no crack opens between them. Checked across the river, where the levels differ most."""
+    m = meshes.build("countryside")
+    n = meshes.TERRAIN_CELLS
+    verts = m.terrain_vertices
+    ranges = meshes._chunk_ranges(n)
+    side = meshes.CHUNKS
+    pairs = []
+    for z in (-150.0, 0.0, 60.0):
+        k = _chunk_at(float(terrain.river_x(z)), z)
+        pairs += [(k, k + 1), (k, k + side)]   # the neighbour in +x, in +z
+    for a, b in pairs:
+        (ai0, ai1, aj0, aj1), (bi0, bi1, bj0, bj1) = ranges[a], ranges[b]
+        if b == a + 1:
+            border = [aj * n + ai1 for aj in range(aj0, aj1 + 1)]
+        else:
+            border = [aj1 * n + ai for ai in range(ai0, ai1 + 1)]
+        la, lb = _levels(m, a), _levels(m, b)
+        depth = {}
+        for k, lv in ((a, la), (b, lb)):
+            tri = lv[0][1].reshape(-1, 3).astype(np.int64)
+            depth[k] = float(verts[tri[0, 1], 1] - verts[tri[0, 2], 1])
+        for ca, _ in la:
+            ha = np.array([_plane_height_at(verts, ca, float(verts[g, 0]), float(verts[g, 2])) for g in border])
+            for cb, _ in lb:
+                hb = np.array([_plane_height_at(verts, cb, float(verts[g, 0]), float(verts[g, 2])) for g in border])
+                assert float((ha - hb).max()) <= depth[a]
+                assert float((hb - ha).max()) <= depth[b]
+    # the check has teeth: across the river the coarsest levels step by more than a metre
+    assert float(m.terrain_lod_error[_chunk_at(float(terrain.river_x(0.0)), 0.0)].max()) > 1.0
 
 
 def test_the_indexed_objects_are_their_triangles_with_each_vertex_once():
@@ -109,15 +182,18 @@ def test_each_level_of_details_error_is_the_largest_height_gap_at_a_grid_vertex(
     ranges = meshes._chunk_ranges(n)
     assert m.terrain_lod_error.shape == (len(table), len(meshes.LOD_STRIDES))
     assert np.all(m.terrain_lod_error[:, 0] == 0.0)
-    for k in (0, 27, 36):   # a corner; the river and the road; the river south of the road
+    smooth = _chunk_at(-200.0, -200.0)
+    river = _chunk_at(float(terrain.river_x(0.0)), 0.0)
+    south = _chunk_at(float(terrain.river_x(-60.0)), -60.0)
+    for k in (0, river, south):   # a corner; the river and the road; the river south of the road
         i0, i1, j0, j1 = ranges[k]
         I, J = np.meshgrid(np.arange(i0, i1 + 1), np.arange(j0, j1 + 1), indexing="xy")
         grid = (J * n + I).ravel()
-        for level in (1, 2):
-            f, c = table[k, 4 + 2 * level], table[k, 5 + 2 * level]
-            coarse = m.terrain_indices[f:f + c]
+        for level, (coarse, _) in enumerate(_levels(m, k)):
+            if level == 0:
+                continue
             gap = max(abs(_plane_height_at(verts, coarse, float(verts[g, 0]), float(verts[g, 2]))
                           - float(verts[g, 1])) for g in grid)
             assert m.terrain_lod_error[k, level] == pytest.approx(gap, abs=1e-5)
     # where the ground is smooth, the coarse levels are close; across the river, not
-    assert m.terrain_lod_error[0, 2] < 0.1 and m.terrain_lod_error[27, 2] > 0.3
+    assert m.terrain_lod_error[smooth, 2] < 0.1 and m.terrain_lod_error[river, 2] > 0.3

@@ -29,6 +29,8 @@ class SceneMesh:
     far: tuple[int, int]                       # first index and count of the far land
     full_detail: int = 0                       # terrain indices at full detail (shadow, lightmap)
     lod_error: np.ndarray | None = None        # each chunk's vertical error (m) at each level
+    skirt0: np.ndarray | None = None           # each chunk's skirt at full detail: first index, count
+    skirts: np.ndarray | None = None           # each level's skirt index count (the level's range ends with it)
 
 
 class Meshes:
@@ -59,7 +61,8 @@ class Meshes:
             objects = self.ctx.vertex_array(objects_prog, [(vbo, *fmt)], ibo, 4)
             shadow.append((self.ctx.vertex_array(shadow_prog, [(vbo, "3f 28x", "aPos")], ibo, 4), -1))
             self._meshes[name] = SceneMesh(terrain, bake, objects, shadow, m.bounds, m.terrain_chunks,
-                                           m.terrain_far, m.full_detail, m.terrain_lod_error)
+                                           m.terrain_far, m.full_detail, m.terrain_lod_error,
+                                           m.terrain_skirt0, m.terrain_skirts)
         return self._meshes[name]
 
 

@@ -1,7 +1,8 @@
 """Deterministic procedural scenes as vertex arrays (numpy, no GL).
 
 Vertex layout: position (3), normal (3), albedo in linear RGB (3), material (1):
-0 = vertex colour, 1 = terrain (albedo made in the shader), 2 = water, 3 = unlit.
+0 = vertex colour, 1 = terrain (albedo made in the shader), 2 = water, 3 = unlit,
+4 = a terrain chunk's skirt (_skirt).
 
 "countryside" is the seeds' kind of view: hills and a river valley, the river with a
 bridge, a road over it, a house, a forest. "calibration" is a flat ground plane and
@@ -20,22 +21,25 @@ from fogbank.scene.landmarks import HOUSE, tree_spots
 from fogbank.model.fields import srgb_to_linear
 
 VERTEX_FLOATS = 10
-CHUNKS = 8   # terrain chunks per side
+CHUNKS = 16   # terrain chunks per side (18 grid cells)
 TERRAIN_CELLS = 288   # vertices per side of the detailed grid
-LOD_STRIDES = (1, 2, 4)   # a chunk's levels of detail: grid cells per coarse cell side
+LOD_STRIDES = (1, 2, 4, 8, 16)   # a chunk's levels of detail: grid cells per coarse cell side
 
 
 @dataclass(frozen=True)
 class Mesh:
     terrain_vertices: np.ndarray   # (N, 10) float32, indexed
     terrain_indices: np.ndarray    # (M,) uint32, chunk after chunk, then the far land
-    terrain_chunks: np.ndarray     # (K, 10): first index, count, centre x, y, z, radius (m), and
-                                   # first index and count at strides 2 and 4 (LOD_STRIDES)
+    terrain_chunks: np.ndarray     # (K, 6 + 2 (levels - 1)): first index and count of its cells
+                                   # at full detail, centre x, y, z, radius (m), then each coarser
+                                   # level's (LOD_STRIDES) first index and count: cells, then skirt
     objects: np.ndarray            # (K, 10) float32, plain triangles
     bounds: tuple[np.ndarray, float]  # centre and half-size, for the shadow map
     terrain_far: tuple[int, int] = (0, 0)   # first index and count of the far land (the skirt)
     terrain_lod_error: np.ndarray | None = None   # (K, len(LOD_STRIDES)) m: each chunk's
                                    # vertical error at each level of detail (lod_errors)
+    terrain_skirt0: np.ndarray | None = None   # (K, 2): first index and count of the skirt at full detail
+    terrain_skirts: np.ndarray | None = None   # (K, len(LOD_STRIDES)): each level's skirt, indices
 
     @property
     def full_detail(self) -> int:
@@ -181,51 +185,109 @@ def _lines(lo: int, hi: int, stride: int) -> list[int]:
 
 
 def _chunk_indices(n: int, i0: int, i1: int, j0: int, j1: int, stride: int) -> np.ndarray:
-    """Triangles of a chunk's cells at a level of detail. Stride 1: every grid cell, two
-    triangles. Stride s: cells s grid cells wide; one inside the chunk is two triangles; one
-    on the chunk's border is a fan from a grid vertex inside it over every grid vertex of
-    its border side(s), so that every chunk's border is the full grid at any level: chunks
-    of different levels meet without a crack. Winding as the grid's (a, c, b)."""
-    def v(i, j):
-        return j * n + i
+    """Triangles of a chunk's cells at a level of detail: cells `stride` grid cells wide
+    (_lines), two triangles each, wound as the grid's (a, c, b). A coarse chunk's border
+    is at its own stride too; _skirt hides the cracks where it meets a finer one."""
     if stride == 1:
-        I, J = np.meshgrid(np.arange(i0, i1), np.arange(j0, j1), indexing="xy")
-        a = (J * n + I).ravel()
-        b, c, d = a + 1, a + n, a + n + 1
-        return np.stack([a, c, b, b, c, d], 1).ravel()
-    xs, zs = _lines(i0, i1, stride), _lines(j0, j1, stride)
-    tris: list[int] = []
-    for ya, yb in zip(zs[:-1], zs[1:]):
-        for xa, xb in zip(xs[:-1], xs[1:]):
-            if xa > i0 and xb < i1 and ya > j0 and yb < j1:
-                a, b, c, d = v(xa, ya), v(xb, ya), v(xa, yb), v(xb, yb)
-                tris += [a, c, b, b, c, d]
-                continue
-            # the border, counterclockwise in (i, j): every grid vertex on a side that lies on
-            # the chunk's border, only the corners on the others
-            ring = [(i, ya) for i in (range(xa, xb) if ya == j0 else [xa])]
-            ring += [(xb, j) for j in (range(ya, yb) if xb == i1 else [ya])]
-            ring += [(i, yb) for i in (range(xb, xa, -1) if yb == j1 else [xb])]
-            ring += [(xa, j) for j in (range(yb, ya, -1) if xa == i0 else [yb])]
-            centre = v((xa + xb) // 2, (ya + yb) // 2)
-            for k in range(len(ring)):   # clockwise, as the grid's triangles
-                p, q = ring[k], ring[(k + 1) % len(ring)]
-                tris += [centre, v(*q), v(*p)]
+        xs, zs = np.arange(i0, i1 + 1), np.arange(j0, j1 + 1)
+    else:
+        xs, zs = np.array(_lines(i0, i1, stride)), np.array(_lines(j0, j1, stride))
+    XA, ZA = np.meshgrid(xs[:-1], zs[:-1], indexing="xy")
+    XB, ZB = np.meshgrid(xs[1:], zs[1:], indexing="xy")
+    a, b, c, d = ZA * n + XA, ZA * n + XB, ZB * n + XA, ZB * n + XB
+    return np.stack([a, c, b, b, c, d], -1).ravel().astype(np.int64)
+
+
+def _ring(i0: int, i1: int, j0: int, j1: int, stride: int) -> list[tuple[int, int]]:
+    """A chunk's border vertices (i, j) at a level of detail, once round, counterclockwise
+    in (i, j) from (i0, j0)."""
+    if stride == 1:
+        xs, zs = list(range(i0, i1 + 1)), list(range(j0, j1 + 1))
+    else:
+        xs, zs = _lines(i0, i1, stride), _lines(j0, j1, stride)
+    return ([(i, j0) for i in xs[:-1]] + [(i1, j) for j in zs[:-1]]
+            + [(i, j1) for i in xs[:0:-1]] + [(i0, j) for j in zs[:0:-1]])
+
+
+# A chunk's skirt (Ulrich 2002, "Rendering massive terrains using chunked level of
+# detail control"): a strip hanging from its border, straight down by the chunk's
+# SKIRT depth. Chunks drawn at different levels do not share their border's vertices;
+# where a border runs above its neighbour's, its skirt fills the step between them.
+# Below the ground it is hidden from any eye above the ground (render/passes/scene.py
+# draws none for an eye below it). Its lower vertices are material 4, which the scene
+# program never turns to face the eye (passes/scene.frag): it is shaded as the border.
+SKIRT_MATERIAL = 4.0
+SKIRT_MARGIN = 0.05   # m below the largest step the chunk can meet
+
+
+def skirt_depths(errors: np.ndarray) -> np.ndarray:
+    """Each chunk's skirt depth (m) from every chunk's vertical error (K, levels), chunks
+    row by row as _chunk_ranges: along a shared border both sides lie within their own
+    error of the grid, and the step between them is largest at a grid vertex, so it is at
+    most the chunk's largest error plus its largest neighbour's (the far land's border is
+    the grid's own)."""
+    worst = errors.max(axis=1)
+    side = int(round(np.sqrt(len(worst))))
+    w = worst.reshape(side, side)
+    nb = np.zeros_like(w)
+    nb[1:, :] = np.maximum(nb[1:, :], w[:-1, :])
+    nb[:-1, :] = np.maximum(nb[:-1, :], w[1:, :])
+    nb[:, 1:] = np.maximum(nb[:, 1:], w[:, :-1])
+    nb[:, :-1] = np.maximum(nb[:, :-1], w[:, 1:])
+    return (w + nb).ravel() + SKIRT_MARGIN
+
+
+def _skirt(n: int, ring: list[tuple[int, int]], lower: dict[tuple[int, int], int]) -> np.ndarray:
+    """Two triangles down from each segment p-q of the ring to the lowered copies p', q'
+    (vertex indices in `lower`): (p, q, q') and (p, q', p'), the last vertex (GL's
+    provoking vertex, which gives a flat varying its value) a lowered one."""
+    tris = []
+    for k in range(len(ring)):
+        p, q = ring[k], ring[(k + 1) % len(ring)]
+        tp, tq = p[1] * n + p[0], q[1] * n + q[0]
+        tris += [tp, tq, lower[q], tp, lower[q], lower[p]]
     return np.array(tris, dtype=np.int64)
 
 
-def _terrain_lods(n: int, first: int) -> np.ndarray:
-    """Indices of every chunk at strides 2 and 4, and the table (K, 4) of their first index
-    (from `first` on) and count."""
-    idx, table = [], []
-    for i0, i1, j0, j1 in _chunk_ranges(n):
-        row = []
-        for stride in LOD_STRIDES[1:]:
-            tri = _chunk_indices(n, i0, i1, j0, j1, stride)
-            row += [first + sum(len(x) for x in idx), len(tri)]
-            idx.append(tri)
+def _terrain_lods(verts: np.ndarray, n: int, first: int):
+    """Every chunk's levels of detail with their skirts, as indices from `first` on, chunk
+    after chunk: level 0's skirt (its cells are the full-detail block's), then each coarser
+    level's cells and skirt. Returns the indices, the table (K, 2 (levels - 1)) of each
+    coarser level's first index and count (cells then skirt), level 0's skirt (K, 2), each
+    level's skirt index count (K, levels), the errors (K, levels; lod_errors of the
+    cells) and the lowered vertices (rows of `verts`' layout, numbered from len(verts))."""
+    ranges = _chunk_ranges(n)
+    cells = [[_chunk_indices(n, *rg, s) for s in LOD_STRIDES] for rg in ranges]
+    errors = np.array([[0.0] + [lod_errors(verts, c) for c in row[1:]] for row in cells])
+    depth = skirt_depths(errors)
+    idx, table, skirt0, skirt_counts, lowered = [], [], [], [], []
+    at, next_vertex = first, len(verts)
+    for k, rg in enumerate(ranges):
+        ring = _ring(*rg, 1)
+        lower = {}
+        for i, j in ring:
+            v = verts[j * n + i].copy()
+            v[1] -= depth[k]
+            v[9] = SKIRT_MATERIAL
+            lower[(i, j)] = next_vertex
+            next_vertex += 1
+            lowered.append(v)
+        row, counts = [], []
+        for level, stride in enumerate(LOD_STRIDES):
+            skirt = _skirt(n, _ring(*rg, stride), lower)
+            part = skirt if level == 0 else np.concatenate([cells[k][level], skirt])
+            if level == 0:
+                skirt0.append((at, len(part)))
+            else:
+                row += [at, len(part)]
+            counts.append(len(skirt))
+            idx.append(part)
+            at += len(part)
         table.append(row)
-    return np.concatenate(idx).astype(np.uint32), np.array(table, dtype=np.float64)
+        skirt_counts.append(counts)
+    return (np.concatenate(idx).astype(np.uint32), np.array(table, dtype=np.float64),
+            np.array(skirt0, dtype=np.float64), np.array(skirt_counts, dtype=np.int64), errors,
+            np.array(lowered, dtype=np.float32))
 
 
 def lod_errors(verts: np.ndarray, indices: np.ndarray, n: int = TERRAIN_CELLS) -> float:
@@ -405,18 +467,17 @@ def build(name: str) -> Mesh:
     skirt = _far_skirt()
     far = (len(ti), len(skirt))
     ti = np.concatenate([ti, np.arange(len(tv), len(tv) + len(skirt), dtype=np.uint32)])
-    lod, table = _terrain_lods(TERRAIN_CELLS, len(ti))
+    tv = np.concatenate([tv, skirt])
+    lod, table, skirt0, skirt_counts, err, lowered = _terrain_lods(tv, TERRAIN_CELLS, len(ti))
     ti = np.concatenate([ti, lod])
     tc = np.concatenate([tc, table], axis=1)
-    err = np.array([[0.0] + [lod_errors(tv, ti[f:f + c]) for f, c in row.reshape(-1, 2).astype(int)]
-                    for row in table])
-    tv = np.concatenate([tv, skirt])
+    tv = np.concatenate([tv, lowered])
     E = terrain.EXTENT
     F = SKIRT_OUTER
     water = _quad((-F, terrain.WATER_LEVEL, F), (F, terrain.WATER_LEVEL, F),
                   (F, terrain.WATER_LEVEL, -F), (-F, terrain.WATER_LEVEL, -F), _rgb("#0e2a30"), 2.0)
     objects = np.concatenate([water] + _house() + _bridge() + _trees())
-    return Mesh(tv, ti, tc, objects, (np.array([0.0, 5.0, 0.0]), E * 1.05), far, err)
+    return Mesh(tv, ti, tc, objects, (np.array([0.0, 5.0, 0.0]), E * 1.05), far, err, skirt0, skirt_counts)
 
 
 # The calibration scene: unlit, so a pixel's scene colour equals its albedo exactly.

@@ -13,6 +13,7 @@ from fogbank.render.passes.base import Pass
 from fogbank.render.passes.sky import scene_target, sun_color
 from fogbank.render.resources import SHADOW_SIZE
 from fogbank.scene import camera as cam
+from fogbank.scene import terrain
 
 
 # A terrain chunk is drawn at the coarsest level of detail (meshes.LOD_STRIDES) whose
@@ -23,7 +24,9 @@ from fogbank.scene import camera as cam
 # same; silhouettes and distances move by about a pixel (a pixel on the view's axis: the
 # distance is the eye's, not the depth, so toward the corners of a 55 degree view up to
 # ~1.5 px). On llvmpipe a triangle of a few pixels costs its whole 4x4 block, so coarser
-# far terrain is most of a frame's scene pass.
+# far terrain is most of a frame's scene pass. Chunks at different levels meet with a
+# step between their borders, which each chunk's skirt hides (meshes._skirt); an eye
+# below the ground would see the skirts, and gets every chunk at full detail instead.
 LOD_ERROR_PX = 1.0
 
 
@@ -66,13 +69,25 @@ class ScenePass(Pass):
             set_uniforms(r.terrain_prog, {**common, "uLightmapRect": r.shadow.lightmap_rect})
             r.shadow.lightmap.use(TEX["uLightmap"])
             chunks = mesh.chunks
-            keep = cam.spheres_in_view(view.view_proj, chunks[:, 2:5], chunks[:, 5])
-            seen = chunks[keep]
-            dist = np.linalg.norm(seen[:, 2:5] - view.eye, axis=1)
-            level = lod_levels(dist - seen[:, 5], mesh.lod_error[keep], look.camera.fov, look.height)
+            keep = np.flatnonzero(cam.spheres_in_view(view.view_proj, chunks[:, 2:5], chunks[:, 5]))
+            dist = np.linalg.norm(chunks[keep, 2:5] - view.eye, axis=1)
+            if view.eye[1] < float(terrain.height(view.eye[0], view.eye[2])):
+                # an eye below the ground sees the terrain's underside, and the skirts
+                # hanging from it: every chunk at full detail, which needs none
+                level = np.zeros(len(keep), dtype=int)
+                skirts = False
+            else:
+                level = lod_levels(dist - chunks[keep, 5], mesh.lod_error[keep], look.camera.fov, look.height)
+                skirts = True
             for k in np.argsort(dist):
-                first, count = seen[k, [0, 1]] if level[k] == 0 else seen[k, [4 + 2 * level[k], 5 + 2 * level[k]]]
-                mesh.terrain.render(moderngl.TRIANGLES, vertices=int(count), first=int(first))
+                row, lv = chunks[keep[k]], level[k]
+                if lv == 0:
+                    mesh.terrain.render(moderngl.TRIANGLES, vertices=int(row[1]), first=int(row[0]))
+                    if skirts:
+                        first, count = mesh.skirt0[keep[k]]
+                        mesh.terrain.render(moderngl.TRIANGLES, vertices=int(count), first=int(first))
+                else:
+                    mesh.terrain.render(moderngl.TRIANGLES, vertices=int(row[5 + 2 * lv]), first=int(row[4 + 2 * lv]))
             first, count = mesh.far
             if count:
                 mesh.terrain.render(moderngl.TRIANGLES, vertices=int(count), first=int(first))

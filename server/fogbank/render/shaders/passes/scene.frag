@@ -31,7 +31,10 @@ void main() {
     if (vMaterial == 3) { fColor = vec4(vColor, 1.0); fSunLight = vec4(0.0); return; }
 #endif
     vec3 n = normalize(vNormal);
-    if (!gl_FrontFacing) n = -n;
+    // a back face shows its normal's side; a terrain chunk's skirt (material 4, hanging
+    // straight down from the chunk's border, scene/meshes.py) is seen from either side
+    // and is shaded as the border it hangs from
+    if (!gl_FrontFacing && vMaterial != 4) n = -n;
     vec3 w = (vPos - uEye) / dist;
 #if TERRAIN
     vec3 albedo = terrainAlbedo(vPos, n);
