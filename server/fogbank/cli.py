@@ -73,7 +73,7 @@ def cmd_still(args) -> None:
     if fmt not in ("png", "jpg", "webp"):
         sys.exit(f"fogbank still: --out must end in .png, .jpg or .webp, not {args.out!r}")
     s = get_settings()
-    r = Renderer(create_context(s.gl_backend, s.gl_device))
+    r = Renderer(create_context(s.gl_backend, s.gl_device, s.raster_threads))
     img = r.render(still)
     Path(args.out).write_bytes(encode(img, fmt))
     print(f"{args.out}: {still.width}x{still.height} on {r.info()['renderer']}")
@@ -89,7 +89,7 @@ def cmd_gallery(args) -> None:
     from fogbank.render.renderer import Renderer, create_context
     from fogbank.settings import get_settings
     s = get_settings()
-    r = Renderer(create_context(s.gl_backend, s.gl_device))
+    r = Renderer(create_context(s.gl_backend, s.gl_device, s.raster_threads))
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     rows = []

@@ -18,6 +18,9 @@ class Settings(BaseSettings):
         "auto", description="'auto' and 'egl' use EGL (the GPU where there is one, else llvmpipe); "
         "'default' lets glcontext pick (GLX/WGL/CGL)")
     gl_device: int | None = Field(None, ge=0, description="EGL device index; unset picks the first")
+    raster_threads: int = Field(0, ge=0, le=256, description="llvmpipe's raster threads in each render "
+                                "worker (LP_NUM_THREADS); 0: one more than the worker's share of the "
+                                "cores (render/gl.py raster_threads); a GPU ignores it")
     workers: int = Field(1, ge=1, le=64, description="interactive render worker processes (stream "
                          "frames, cheap stills), each with its own GL context")
     frames_per_worker: int = Field(1, ge=1, le=8, description="stream frames on one "

@@ -3,6 +3,8 @@ that refuses a name its program does not declare, and framebuffer release."""
 
 from __future__ import annotations
 
+import os
+
 import moderngl
 import numpy as np
 
@@ -15,8 +17,24 @@ TEX = {"uColor": 0, "uInvDist": 1, "uFog": 2, "uParticles": 3, "uNoise": 4, "uSh
        "uHeldA": 15, "uHeldB": 16, "uHeldW": 17}
 
 
-def create_context(backend: str = "auto", device: int | None = None) -> moderngl.Context:
-    """A standalone context on EGL (GPU if the EGL device is one, else Mesa llvmpipe)."""
+def raster_threads(workers: int = 1) -> int:
+    """llvmpipe's raster threads for each of `workers` render processes: one more than
+    its share of this process's cores. llvmpipe's default is one per core; the thread that
+    submits the draws (vertex shading, triangle setup) then waits on the raster threads at
+    every change of target, and a small frame's passes (a 320x180 preview has ten) leave a
+    core idle at each. One more: a 320x180 preview of the default look went from 16.1 to
+    12.1 ms (medians of 30 frames, five rounds alternated), 448x252 from 22.7 to 19.2; no
+    difference to measure at 640x360 and 1280x720 on this 2-core machine."""
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    return max(1, cores // max(1, workers)) + 1
+
+
+def create_context(backend: str = "auto", device: int | None = None, threads: int = 0) -> moderngl.Context:
+    """A standalone context on EGL (GPU if the EGL device is one, else Mesa llvmpipe).
+    `threads`: llvmpipe's raster threads (LP_NUM_THREADS, read when the first context of
+    the process is made), 0 for raster_threads(); an LP_NUM_THREADS already set wins, and
+    a GPU ignores it."""
+    os.environ.setdefault("LP_NUM_THREADS", str(threads or raster_threads()))
     if backend == "default":
         return moderngl.create_context(standalone=True, require=330)
     kwargs = {"device_index": device} if device is not None else {}

@@ -103,7 +103,7 @@ class Lane:
         return ProcessPool(max_workers=1, initializer=worker.init,
                            initargs=(s.gl_backend, s.gl_device, self.nice,
                                      (s.worker_cache_mb if self.name == "interactive" else s.batch_cache_mb) << 20,
-                                     s.worker_memory_mb << 20),
+                                     s.worker_memory_mb << 20, s.raster_threads, s.workers),
                            context=multiprocessing.get_context("spawn"))
 
     def least_loaded(self, by: str = "jobs") -> Slot:

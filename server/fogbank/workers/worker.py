@@ -71,11 +71,15 @@ def _fix_mmap_threshold() -> None:
 
 def _build():
     from fogbank.render.renderer import Renderer, create_context
-    return Renderer(create_context(_config["backend"], _config["device"]), cache_bytes=_config["cache_bytes"])
+    return Renderer(create_context(_config["backend"], _config["device"], _config.get("threads", 0)),
+                    cache_bytes=_config["cache_bytes"])
 
 
-def init(backend: str, device: int | None, nice: int, cache_bytes: int, memory_bytes: int) -> None:
-    """pebble initializer: one EGL context and Renderer for this process's life."""
+def init(backend: str, device: int | None, nice: int, cache_bytes: int, memory_bytes: int,
+         threads: int = 0, workers: int = 1) -> None:
+    """pebble initializer: one EGL context and Renderer for this process's life, with
+    `threads` raster threads if on llvmpipe (0: render/gl.py raster_threads for a share of
+    the cores among `workers` interactive workers)."""
     global _renderer
     signal.signal(signal.SIGTERM, signal.SIG_DFL)   # a kill lands even inside a GL call
     libc = _libc()
@@ -84,7 +88,9 @@ def init(backend: str, device: int | None, nice: int, cache_bytes: int, memory_b
     if nice:
         os.nice(nice)   # batch work yields the cores to interactive frames
     _fix_mmap_threshold()
-    _config.update(backend=backend, device=device, cache_bytes=cache_bytes, memory_bytes=memory_bytes)
+    from fogbank.render.gl import raster_threads
+    _config.update(backend=backend, device=device, cache_bytes=cache_bytes, memory_bytes=memory_bytes,
+                   threads=threads or raster_threads(workers))
     _renderer = _build()
     _warm_up()
 
