@@ -197,3 +197,72 @@ def test_each_level_of_details_error_is_the_largest_height_gap_at_a_grid_vertex(
             assert m.terrain_lod_error[k, level] == pytest.approx(gap, abs=1e-5)
     # where the ground is smooth, the coarse levels are close; across the river, not
     assert m.terrain_lod_error[smooth, 2] < 0.1 and m.terrain_lod_error[river, 2] > 0.3
+
+
+def _points_on(tris: np.ndarray, k: int = 6) -> np.ndarray:
+    """Points on triangles (N, 3, 3): a barycentric grid of k steps on each, corners and
+    edge midpoints among them."""
+    u, v = np.meshgrid(np.arange(k + 1), np.arange(k + 1), indexing="ij")
+    keep = u + v <= k
+    u, v = u[keep] / k, v[keep] / k
+    a, b, c = tris[:, 0], tris[:, 1], tris[:, 2]
+    return (a[:, None] + u[None, :, None] * (b - a)[:, None] + v[None, :, None] * (c - a)[:, None]).reshape(-1, 3)
+
+
+def _segment_distance(p, a, b):
+    ab = b - a
+    t = np.clip(np.einsum("...i,...i->...", p - a, ab) / np.einsum("...i,...i->...", ab, ab), 0.0, 1.0)
+    return np.linalg.norm(p - (a + t[..., None] * ab), axis=-1)
+
+
+def _distance_to_mesh(points: np.ndarray, tris: np.ndarray) -> np.ndarray:
+    """Each point's exact distance (float64) to the nearest of the triangles (M, 3, 3): to
+    its plane where the foot falls inside, else to its nearest edge."""
+    p = points[:, None, :]
+    a, b, c = (tris[None, :, i] for i in range(3))
+    n = np.cross(b - a, c - a)
+    n /= np.linalg.norm(n, axis=-1, keepdims=True)
+    h = np.einsum("...i,...i->...", p - a, n)
+    foot = p - h[..., None] * n
+    inside = np.ones(h.shape, bool)
+    for q, r in ((a, b), (b, c), (c, a)):
+        inside &= np.einsum("...i,...i->...", np.cross(r - q, foot - q), n) >= 0.0
+    d = np.where(inside, np.abs(h), np.inf)
+    for q, r in ((a, b), (b, c), (c, a)):
+        d = np.minimum(d, _segment_distance(p, q, r))
+    return d.min(axis=1)
+
+
+def test_a_coarse_tree_lies_within_its_groups_gap_of_the_full_one():
+    """Every tree's coarse mesh against its full one, both ways: points on one surface to
+    the other, exactly, within the tree's stored gap, itself within its group's; the gap
+    no bound of several times too much."""
+    m = meshes.build("countryside")
+    worst = 0.0
+    for x, z, full, coarse, gap in meshes._trees():
+        assert gap <= float(m.object_groups[:, 8].max())
+        f = full[:, :3].astype(np.float64).reshape(-1, 3, 3)
+        c = coarse[:, :3].astype(np.float64).reshape(-1, 3, 3)
+        d = max(float(_distance_to_mesh(_points_on(f), c).max()), float(_distance_to_mesh(_points_on(c), f).max()))
+        assert d <= gap + 1e-5
+        worst = max(worst, d / gap)
+    assert worst > 0.7
+
+
+def test_the_tree_groups_tile_the_objects_at_each_detail():
+    """The water, house and bridge come first, then each group's trees at full detail end
+    to end (that prefix is the shadow map's), then each group coarse; every corner of a
+    group inside its bounding sphere, and the coarse trees fewer."""
+    m = meshes.build("countryside")
+    g = m.object_groups.astype(np.float64)
+    first, count, cfirst, ccount = (g[:, i].astype(int) for i in (0, 1, 6, 7))
+    assert first[0] > 0 and np.array_equal(first[1:], first[:-1] + count[:-1])
+    assert first[-1] + count[-1] == m.objects_full == cfirst[0]
+    assert np.array_equal(cfirst[1:], cfirst[:-1] + ccount[:-1])
+    assert cfirst[-1] + ccount[-1] == len(m.objects)
+    assert int(count.sum()) == sum(len(t[2]) for t in meshes._trees())
+    assert int(ccount.sum()) < 0.5 * int(count.sum())
+    for row in g:
+        for a, n in ((int(row[0]), int(row[1])), (int(row[6]), int(row[7]))):
+            p = m.objects[a:a + n, :3].astype(np.float64)
+            assert float(np.linalg.norm(p - row[2:5], axis=1).max()) <= row[5] + 1e-4

@@ -31,6 +31,8 @@ class SceneMesh:
     lod_error: np.ndarray | None = None        # each chunk's vertical error (m) at each level
     skirt0: np.ndarray | None = None           # each chunk's skirt at full detail: first index, count
     skirts: np.ndarray | None = None           # each level's skirt index count (the level's range ends with it)
+    objects_full: int = -1                     # the objects' indices at full detail, from the first (-1: all)
+    object_groups: np.ndarray | None = None    # the trees by chunk, full and coarse (meshes._objects)
 
 
 class Meshes:
@@ -59,10 +61,10 @@ class Meshes:
             verts, idx = meshes.indexed(m.objects)
             vbo, ibo = self.ctx.buffer(verts.tobytes()), self.ctx.buffer(idx.tobytes())
             objects = self.ctx.vertex_array(objects_prog, [(vbo, *fmt)], ibo, 4)
-            shadow.append((self.ctx.vertex_array(shadow_prog, [(vbo, "3f 28x", "aPos")], ibo, 4), -1))
+            shadow.append((self.ctx.vertex_array(shadow_prog, [(vbo, "3f 28x", "aPos")], ibo, 4), m.objects_full))
             self._meshes[name] = SceneMesh(terrain, bake, objects, shadow, m.bounds, m.terrain_chunks,
                                            m.terrain_far, m.full_detail, m.terrain_lod_error,
-                                           m.terrain_skirt0, m.terrain_skirts)
+                                           m.terrain_skirt0, m.terrain_skirts, m.objects_full, m.object_groups)
         return self._meshes[name]
 
 

@@ -40,6 +40,8 @@ class Mesh:
                                    # vertical error at each level of detail (lod_errors)
     terrain_skirt0: np.ndarray | None = None   # (K, 2): first index and count of the skirt at full detail
     terrain_skirts: np.ndarray | None = None   # (K, len(LOD_STRIDES)): each level's skirt, indices
+    objects_full: int = -1         # the objects' corners at full detail, from the first (-1: all)
+    object_groups: np.ndarray | None = None   # (G, 9): the trees by chunk (_objects)
 
     @property
     def full_detail(self) -> int:
@@ -124,13 +126,13 @@ def cylinder(base, radius, height, color, segments=8) -> np.ndarray:
     return _tris(np.array(pos), np.array(nn), color, 0.0)
 
 
-def blob(center, radius, color, squash=0.85) -> np.ndarray:
+def blob(center, radius, color, squash=0.85, subdivisions=2) -> np.ndarray:
     """A subdivided octahedron (a round crown for broadleaf trees), smooth normals."""
     v = [np.array(p, dtype=np.float64) for p in
          ((1, 0, 0), (-1, 0, 0), (0, 1, 0), (0, -1, 0), (0, 0, 1), (0, 0, -1))]
     faces = [(0, 2, 4), (4, 2, 1), (1, 2, 5), (5, 2, 0), (4, 3, 0), (1, 3, 4), (5, 3, 1), (0, 3, 5)]
     tris = [(v[a], v[b], v[c]) for a, b, c in faces]
-    for _ in range(2):
+    for _ in range(subdivisions):
         nxt = []
         for a, b, c in tris:
             ab, bc, ca = [(p + q) / np.linalg.norm(p + q) for p, q in ((a, b), (b, c), (c, a))]
@@ -369,23 +371,87 @@ def _bridge() -> list[np.ndarray]:
     return parts
 
 
-def _trees() -> list[np.ndarray]:
-    parts = []
+# A tree far enough away is drawn coarser (render/passes/scene.py): crowns and trunks with
+# fewer sides. Both are inscribed in the same circles (spheres), so where they differ is
+# within the coarse one's gap to its circle: r (1 - cos(pi / sides)) for a cone or
+# cylinder, r (1 - the nearest face's distance from the centre) for the unit crown.
+TREE_SIDES = {"cone": (14, 6), "cylinder": (8, 4), "blob": (2, 1)}   # (full, coarse); blob: subdivisions
+
+
+def _blob_gap(subdivisions: int) -> float:
+    """1 - the smallest distance from the centre to a face of the unit crown's mesh."""
+    unit = blob((0.0, 0.0, 0.0), 1.0, (1.0, 1.0, 1.0), squash=1.0, subdivisions=subdivisions)[:, :3]
+    a, b, c = unit[0::3].astype(np.float64), unit[1::3].astype(np.float64), unit[2::3].astype(np.float64)
+    n = np.cross(b - a, c - a)
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    return float(1.0 - np.abs(np.einsum("ij,ij->i", n, a)).min())
+
+
+def _trees() -> list[tuple[float, float, np.ndarray, np.ndarray, float]]:
+    """Every tree: (x, z, triangles, coarse triangles, the coarse one's largest gap to the
+    full one, m)."""
+    out = []
     rng = np.random.default_rng(77)
+    cone_gap = 1.0 - np.cos(np.pi / TREE_SIDES["cone"][1])
+    trunk_gap = 1.0 - np.cos(np.pi / TREE_SIDES["cylinder"][1])
     for x, z, kind in tree_spots():
         y = float(terrain.height(x, z)) - 0.3
         s = rng.uniform(0.8, 1.25)
         trunk = _rgb("#4a3526")
+        both = []
         if kind == "pine":
             green = _rgb("#1f3d1c") * rng.uniform(0.8, 1.15)
-            parts.append(cylinder((x, y, z), 0.35 * s, 3.0 * s, trunk))
-            for k, (r, h) in enumerate(((3.2, 5.5), (2.5, 4.5), (1.7, 3.6))):
-                parts.append(cone((x, y + (2.0 + 2.3 * k) * s, z), r * s, h * s, green))
+            crowns = [((x, y + (2.0 + 2.3 * k) * s, z), r * s, h * s)
+                      for k, (r, h) in enumerate(((3.2, 5.5), (2.5, 4.5), (1.7, 3.6)))]
+            for level in (0, 1):
+                both.append(np.concatenate(
+                    [cylinder((x, y, z), 0.35 * s, 3.0 * s, trunk, TREE_SIDES["cylinder"][level])]
+                    + [cone(b, r, h, green, TREE_SIDES["cone"][level]) for b, r, h in crowns]))
+            gap = max(0.35 * s * trunk_gap, 3.2 * s * cone_gap)
         else:
             green = _rgb("#3a5a22") * rng.uniform(0.8, 1.15)
-            parts.append(cylinder((x, y, z), 0.4 * s, 4.0 * s, trunk))
-            parts.append(blob((x, y + 5.5 * s, z), 3.4 * s, green))
-    return parts
+            for level in (0, 1):
+                both.append(np.concatenate(
+                    [cylinder((x, y, z), 0.4 * s, 4.0 * s, trunk, TREE_SIDES["cylinder"][level]),
+                     blob((x, y + 5.5 * s, z), 3.4 * s, green, subdivisions=TREE_SIDES["blob"][level])]))
+            gap = max(0.4 * s * trunk_gap, 3.4 * s * _blob_gap(TREE_SIDES["blob"][1]))
+        out.append((x, z, both[0], both[1], gap))
+    return out
+
+
+def _objects() -> tuple[np.ndarray, int, np.ndarray]:
+    """The objects' triangles: the water, the house and the bridge, then the trees by
+    terrain chunk (the ground's CHUNKS x CHUNKS squares), each group at full detail, then
+    each group coarse. Also how many corners come before the coarse ones (the scene at
+    full detail: the shadow map's) and the groups' table (G, 9): first corner and count at
+    full detail, bounding sphere (centre x, y, z, radius; m), first corner and count
+    coarse, and the largest gap of a coarse tree to its full one (m)."""
+    E, F = terrain.EXTENT, SKIRT_OUTER
+    water = _quad((-F, terrain.WATER_LEVEL, F), (F, terrain.WATER_LEVEL, F),
+                  (F, terrain.WATER_LEVEL, -F), (-F, terrain.WATER_LEVEL, -F), _rgb("#0e2a30"), 2.0)
+    fixed = np.concatenate([water] + _house() + _bridge())
+    groups: dict[tuple[int, int], list] = {}
+    for tree in _trees():
+        cell = tuple(int(np.clip((c + E) / (2 * E) * CHUNKS, 0, CHUNKS - 1)) for c in tree[:2])
+        groups.setdefault(cell, []).append(tree)
+    full, coarse, table = [], [], []
+    at = len(fixed)
+    for cell in sorted(groups):
+        trees = groups[cell]
+        tris = np.concatenate([t[2] for t in trees])
+        pts = np.concatenate([tris] + [t[3] for t in trees])[:, :3].astype(np.float64)   # either detail
+        centre = (pts.min(axis=0) + pts.max(axis=0)) / 2
+        table.append([at, len(tris), *centre, float(np.linalg.norm(pts - centre, axis=1).max()),
+                      0, 0, max(t[4] for t in trees)])
+        full.append(tris)
+        at += len(tris)
+    for row, cell in zip(table, sorted(groups)):
+        tris = np.concatenate([t[3] for t in groups[cell]])
+        row[6], row[7] = at, len(tris)
+        coarse.append(tris)
+        at += len(tris)
+    objects = np.concatenate([fixed] + full + coarse)
+    return objects, sum(len(x) for x in [fixed] + full), np.array(table, dtype=np.float64)
 
 
 # The land beyond the detailed terrain, out to the horizon: the same height field on a
@@ -473,11 +539,9 @@ def build(name: str) -> Mesh:
     tc = np.concatenate([tc, table], axis=1)
     tv = np.concatenate([tv, lowered])
     E = terrain.EXTENT
-    F = SKIRT_OUTER
-    water = _quad((-F, terrain.WATER_LEVEL, F), (F, terrain.WATER_LEVEL, F),
-                  (F, terrain.WATER_LEVEL, -F), (-F, terrain.WATER_LEVEL, -F), _rgb("#0e2a30"), 2.0)
-    objects = np.concatenate([water] + _house() + _bridge() + _trees())
-    return Mesh(tv, ti, tc, objects, (np.array([0.0, 5.0, 0.0]), E * 1.05), far, err, skirt0, skirt_counts)
+    objects, objects_full, groups = _objects()
+    return Mesh(tv, ti, tc, objects, (np.array([0.0, 5.0, 0.0]), E * 1.05), far, err, skirt0, skirt_counts,
+                objects_full, groups)
 
 
 # The calibration scene: unlit, so a pixel's scene colour equals its albedo exactly.

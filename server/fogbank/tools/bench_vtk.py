@@ -42,9 +42,10 @@ def scene_triangles(name: str = "countryside") -> tuple[np.ndarray, np.ndarray, 
     full = getattr(m, "full_detail", len(m.terrain_indices))   # the coarser levels follow it
     tris = [m.terrain_indices[:full].reshape(-1, 3).astype(np.int64)]
     n0 = len(pos[0])
-    pos.append(m.objects[:, :3])
-    nrm.append(m.objects[:, 3:6])
-    tris.append(np.arange(len(m.objects), dtype=np.int64).reshape(-1, 3) + n0)
+    objects = m.objects[:m.objects_full] if getattr(m, "objects_full", -1) >= 0 else m.objects   # coarse trees follow
+    pos.append(objects[:, :3])
+    nrm.append(objects[:, 3:6])
+    tris.append(np.arange(len(objects), dtype=np.int64).reshape(-1, 3) + n0)
     return np.concatenate(pos), np.concatenate(nrm), np.concatenate(tris)
 
 

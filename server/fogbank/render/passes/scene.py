@@ -92,5 +92,20 @@ class ScenePass(Pass):
             if count:
                 mesh.terrain.render(moderngl.TRIANGLES, vertices=int(count), first=int(first))
         set_uniforms(r.scene_prog, common)
-        mesh.objects.render(moderngl.TRIANGLES)
+        groups = mesh.object_groups
+        if groups is None or not len(groups):
+            mesh.objects.render(moderngl.TRIANGLES)
+        else:
+            # the water, the house and the bridge; then the trees by chunk in view, nearest
+            # first, each group coarse where its coarse trees' largest gap to the full ones
+            # is within LOD_ERROR_PX at its nearest point (scene/meshes.py TREE_SIDES)
+            mesh.objects.render(moderngl.TRIANGLES, vertices=int(groups[0, 0]), first=0)
+            keep = np.flatnonzero(cam.spheres_in_view(view.view_proj, groups[:, 2:5], groups[:, 5]))
+            dist = np.linalg.norm(groups[keep, 2:5] - view.eye, axis=1)
+            errors = np.stack([np.zeros(len(keep)), groups[keep, 8]], axis=1)
+            level = lod_levels(dist - groups[keep, 5], errors, look.camera.fov, look.height)
+            for k in np.argsort(dist):
+                row = groups[keep[k]]
+                first, count = (row[0], row[1]) if level[k] == 0 else (row[6], row[7])
+                mesh.objects.render(moderngl.TRIANGLES, vertices=int(count), first=int(first))
         f.gbuffer.scene_key = f.scene_key
