@@ -51,7 +51,7 @@ def _rays(cam) -> np.ndarray:
     return w / np.linalg.norm(w, axis=-1, keepdims=True)
 
 
-def _terrain_hits(eye, rays, far=700.0, step=0.5, below=False):
+def _terrain_hits(eye, rays, far=600.0, step=1.0, below=False):
     """The distance (m) to the first point below terrain.height along each ray (marched,
     then bisected; `below`: the first above it, for an eye under the ground), inf where
     none lies within `far` or the hit is outside the detailed square (the far land there
