@@ -266,3 +266,37 @@ def test_the_tree_groups_tile_the_objects_at_each_detail():
         for a, n in ((int(row[0]), int(row[1])), (int(row[6]), int(row[7]))):
             p = m.objects[a:a + n, :3].astype(np.float64)
             assert float(np.linalg.norm(p - row[2:5], axis=1).max()) <= row[5] + 1e-4
+
+
+def test_the_far_lands_skirt_reaches_below_every_edge_chunk_at_any_level():
+    """On the detailed square's edge the far land has the grid's own heights. Where an edge
+    chunk's cells (at any level, found by search) run below them, the far land's inner
+    skirt reaches below the cells; where above, the chunk's own skirt reaches the grid.
+    Checked where the river crosses the square's north and south edges, and at a corner."""
+    m = meshes.build("countryside")
+    n = meshes.TERRAIN_CELLS
+    verts = m.terrain_vertices
+    ranges = meshes._chunk_ranges(n)
+    f, c = m.terrain_far_skirt
+    tri = m.terrain_indices[f:f + c].reshape(-1, 3).astype(np.int64)
+    assert len(tri) == 2 * 4 * (n - 1)   # two triangles down from every segment of the edge
+    far_depth = set(np.round(verts[tri[:, 1], 1] - verts[tri[:, 2], 1], 4)[0::2].tolist())
+    assert len(far_depth) == 1
+    far_depth = far_depth.pop()
+    E = terrain.EXTENT
+    worst = 0.0
+    for x, z in ((float(terrain.river_x(-E)), -E), (float(terrain.river_x(E)), E), (-E, -E)):
+        k = _chunk_at(min(x, E - 1.0), min(z, E - 1.0))
+        i0, i1, j0, j1 = ranges[k]
+        border = sorted({j * n + i for i in range(i0, i1 + 1) for j in range(j0, j1 + 1)
+                         if i in (0, n - 1) or j in (0, n - 1)})
+        levels = _levels(m, k)
+        own = levels[0][1].reshape(-1, 3).astype(np.int64)
+        own_depth = float(verts[own[0, 1], 1] - verts[own[0, 2], 1])
+        for cells, _ in levels:
+            h = np.array([_plane_height_at(verts, cells, float(verts[g, 0]), float(verts[g, 2])) for g in border])
+            step = verts[border, 1].astype(np.float64) - h
+            assert float(step.max()) <= far_depth
+            assert float(-step.min()) <= own_depth
+            worst = max(worst, float(step.max()))
+    assert worst > 0.05   # the coarse levels do run below the grid there

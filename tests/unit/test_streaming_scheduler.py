@@ -11,14 +11,22 @@ from fogbank.stream.session import Session
 from fogbank.stream.streaming import Client, Streamer
 
 
-def _streamer(frames_per_worker=1):
-    st = Streamer(workers=None, frames_per_worker=frames_per_worker)
-    s = Session("a", now=0.0)
+SLOT = SimpleNamespace(index=0)
+
+
+def _client(st, sid, measured_ms=20.0):
+    s = Session(sid, now=0.0)
     s.apply(parse('{"type": "view", "width": 64, "height": 64, "fps": 120}'), 0.0)
+    s.last_ms = measured_ms   # as Session.measured leaves it after a frame
     c = Client(s, ws=None, addr="127.0.0.1", now=0.0)
-    c.slot = SimpleNamespace(index=0)
+    c.slot = SLOT
     st.clients[s.id] = c
-    return st, c
+    return c
+
+
+def _streamer(frames_per_worker=1, measured_ms=20.0):
+    st = Streamer(workers=None, frames_per_worker=frames_per_worker)
+    return st, _client(st, "a", measured_ms)
 
 
 def _start(st, c, now):
@@ -57,6 +65,22 @@ def test_a_preview_never_waits_behind_another_frame():
 
 def test_frames_per_worker_sets_the_depth_and_playing_adds_one():
     st, c = _streamer(frames_per_worker=2)
-    assert st.queue_room(c.session, 0.0) == 3
+    assert st.queue_room(c, 0.0) == 3
     c.session.apply(parse('{"type": "interact", "active": true}'), 0.0)
-    assert st.queue_room(c.session, 0.0) == 2
+    assert st.queue_room(c, 0.0) == 2
+
+
+def test_no_second_frame_before_frames_are_measured_or_when_they_near_the_deadline():
+    for ms in (None, 0.26e3 * Streamer(workers=None).settings.frame_deadline_s):
+        st, c = _streamer(measured_ms=ms)
+        assert _start(st, c, 0.0) is not None
+        assert _start(st, c, 0.01) is None
+
+
+def test_a_playing_stream_leaves_the_worker_to_a_session_that_previews():
+    st, playing = _streamer()
+    dragging = _client(st, "b")
+    dragging.session.apply(parse('{"type": "interact", "active": true}'), 0.0)
+    assert st.queue_room(playing, 0.0) == 1
+    dragging.session.apply(parse('{"type": "interact", "active": false}'), 0.0)
+    assert st.queue_room(playing, 1.0) == 2

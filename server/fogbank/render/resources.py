@@ -33,6 +33,7 @@ class SceneMesh:
     skirts: np.ndarray | None = None           # each level's skirt index count (the level's range ends with it)
     objects_full: int = -1                     # the objects' indices at full detail, from the first (-1: all)
     object_groups: np.ndarray | None = None    # the trees by chunk, full and coarse (meshes._objects)
+    far_skirt: tuple[int, int] = (0, 0)        # the far land's inner skirt: first index, count
 
 
 class Meshes:
@@ -53,7 +54,7 @@ class Meshes:
             if len(m.terrain_indices):
                 vbo = self.ctx.buffer(m.terrain_vertices.tobytes())
                 ibo = self.ctx.buffer(m.terrain_indices.tobytes())
-                # the terrain program reads no colour or material: those attributes are skipped
+                # the terrain program reads no colour (its material: a skirt's, passes/scene.frag): skipped
                 terrain = self.ctx.vertex_array(terrain_prog, [(vbo, *fmt)], ibo, 4, skip_errors=True)
                 bake = self.ctx.vertex_array(bake_prog, [(vbo, "3f 3f 16x", "aPos", "aNormal")], ibo, 4)
                 shadow.append((self.ctx.vertex_array(shadow_prog, [(vbo, "3f 28x", "aPos")], ibo, 4),
@@ -64,7 +65,8 @@ class Meshes:
             shadow.append((self.ctx.vertex_array(shadow_prog, [(vbo, "3f 28x", "aPos")], ibo, 4), m.objects_full))
             self._meshes[name] = SceneMesh(terrain, bake, objects, shadow, m.bounds, m.terrain_chunks,
                                            m.terrain_far, m.full_detail, m.terrain_lod_error,
-                                           m.terrain_skirt0, m.terrain_skirts, m.objects_full, m.object_groups)
+                                           m.terrain_skirt0, m.terrain_skirts, m.objects_full, m.object_groups,
+                                           m.terrain_far_skirt)
         return self._meshes[name]
 
 

@@ -21,7 +21,7 @@ from fogbank.scene.landmarks import HOUSE, tree_spots
 from fogbank.model.fields import srgb_to_linear
 
 VERTEX_FLOATS = 10
-CHUNKS = 16   # terrain chunks per side (18 grid cells)
+CHUNKS = 16   # terrain chunks per side (18 grid cells, the last 17)
 TERRAIN_CELLS = 288   # vertices per side of the detailed grid
 LOD_STRIDES = (1, 2, 4, 8, 16)   # a chunk's levels of detail: grid cells per coarse cell side
 
@@ -42,6 +42,7 @@ class Mesh:
     terrain_skirts: np.ndarray | None = None   # (K, len(LOD_STRIDES)): each level's skirt, indices
     objects_full: int = -1         # the objects' corners at full detail, from the first (-1: all)
     object_groups: np.ndarray | None = None   # (G, 9): the trees by chunk (_objects)
+    terrain_far_skirt: tuple[int, int] = (0, 0)   # first index and count of the far land's inner skirt
 
     @property
     def full_detail(self) -> int:
@@ -538,10 +539,27 @@ def build(name: str) -> Mesh:
     ti = np.concatenate([ti, lod])
     tc = np.concatenate([tc, table], axis=1)
     tv = np.concatenate([tv, lowered])
+    # the far land's inner edge is the full grid's: where a coarse edge chunk's border runs
+    # below it, a skirt hanging from the far land's edge fills the step (by the edge
+    # chunks' largest error; where the chunk's border runs above, its own skirt does)
+    n = TERRAIN_CELLS
+    edge = [k for k, (i0, i1, j0, j1) in enumerate(_chunk_ranges(n)) if min(i0, j0) == 0 or max(i1, j1) == n - 1]
+    ring = _ring(0, n - 1, 0, n - 1, 1)
+    lower = {}
+    drop = []
+    for i, j in ring:
+        v = tv[j * n + i].copy()
+        v[1] -= float(err[edge].max()) + SKIRT_MARGIN
+        v[9] = SKIRT_MATERIAL
+        lower[(i, j)] = len(tv) + len(drop)
+        drop.append(v)
+    far_skirt = (len(ti), 6 * len(ring))
+    ti = np.concatenate([ti, _skirt(n, ring, lower).astype(np.uint32)])
+    tv = np.concatenate([tv, np.array(drop, dtype=np.float32)])
     E = terrain.EXTENT
     objects, objects_full, groups = _objects()
     return Mesh(tv, ti, tc, objects, (np.array([0.0, 5.0, 0.0]), E * 1.05), far, err, skirt0, skirt_counts,
-                objects_full, groups)
+                objects_full, groups, far_skirt)
 
 
 # The calibration scene: unlit, so a pixel's scene colour equals its albedo exactly.

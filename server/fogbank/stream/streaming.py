@@ -119,15 +119,26 @@ class Streamer:
         except Exception:  # noqa: BLE001 - a dead worker has nothing left to free
             pass
 
-    def queue_room(self, session: Session, now: float) -> int:
-        """How many frames may be on the worker when one of `session`'s starts: one more
-        than `frames_per_worker` unless the session previews. A frame queued behind the
-        one being drawn starts the moment that one ends, so the worker never idles through
-        the hand-over between frames (the result's trip to this process, the next job's
-        back: 4-6 ms a frame here); it costs a frame of latency, which a stream that only
-        plays (the camera still, time running) does not feel, and a drag does: previews
-        never queue behind another frame."""
-        return self.frames_per_worker + (0 if session.previewing(now) else 1)
+    def queue_room(self, client: Client, now: float) -> int:
+        """How many frames may be on the worker when one of `client`'s starts:
+        `frames_per_worker`, and one more for a stream that only plays. A frame queued
+        behind the one being drawn starts the moment that one ends, so the worker does not
+        idle through the hand-over between frames (the result's trip to this process, the
+        next job's back: 4-6 ms a frame here), at a frame of latency. Not for a preview (a
+        drag's frame shows the newest camera); not while another session on the worker
+        previews (its preview starts only on an idle worker, which a playing stream would
+        keep full); not before the session's frames are measured, nor when they take over
+        a quarter of the frame deadline (a queued frame of a look that passes it would
+        run, and be stopped, on the worker restarted for the first). A preview that input
+        starts can still wait behind one queued frame."""
+        s = client.session
+        room = self.frames_per_worker
+        if s.previewing(now) or s.last_ms is None or s.last_ms > 250.0 * self.settings.frame_deadline_s:
+            return room
+        if any(c is not client and c.slot is client.slot and c.session.previewing(now)
+               for c in self.clients.values()):
+            return room
+        return room + 1
 
     def _pick(self, now: float) -> tuple[Client | None, float | None]:
         """The next due client (whose worker has room) in round-robin order, else when
@@ -136,7 +147,7 @@ class Streamer:
         soonest = None
         for i in range(len(clients)):
             c = clients[(self._rr + i) % len(clients)]
-            if self.frames.get(c.slot.index, 0) >= self.queue_room(c.session, now):
+            if self.frames.get(c.slot.index, 0) >= self.queue_room(c, now):
                 continue   # a finished frame wakes the scheduler
             due = c.session.next_due(now)
             if due is None:

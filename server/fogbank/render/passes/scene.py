@@ -91,6 +91,9 @@ class ScenePass(Pass):
             first, count = mesh.far
             if count:
                 mesh.terrain.render(moderngl.TRIANGLES, vertices=int(count), first=int(first))
+            first, count = mesh.far_skirt
+            if count and skirts:
+                mesh.terrain.render(moderngl.TRIANGLES, vertices=int(count), first=int(first))
         set_uniforms(r.scene_prog, common)
         groups = mesh.object_groups
         if groups is None or not len(groups):
