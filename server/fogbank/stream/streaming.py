@@ -41,7 +41,8 @@ from fogbank.workers.supervisor import DeadlineExceeded, Slot, Supervisor, Worke
 log = logging.getLogger("fogbank.stream")
 
 
-IDLE_CLOSE = 4408   # closed for inactivity (no messages, or frames left unacknowledged)
+IDLE_CLOSE = 4408
+QUEUE_MAX_MS = 60.0   # a frame costlier than this is never queued behind another (Streamer.queue_room)   # closed for inactivity (no messages, or frames left unacknowledged)
 
 
 class Client:
@@ -128,12 +129,13 @@ class Streamer:
         drag's frame shows the newest camera); not while another session on the worker
         previews (its preview starts only on an idle worker, which a playing stream would
         keep full); not before the session's frames are measured, nor when they take over
-        a quarter of the frame deadline (a queued frame of a look that passes it would
-        run, and be stopped, on the worker restarted for the first). A preview that input
-        starts can still wait behind one queued frame."""
+        QUEUE_MAX_MS: a preview that input starts can wait behind the queued frame, so
+        that is the most latency the queue adds to it (a look of 16 layers whose full frames
+        took 700 ms kept a drag's first previews 1.4 s behind), and a look that passes the
+        frame deadline never has a second frame waiting to run on the restarted worker."""
         s = client.session
         room = self.frames_per_worker
-        if s.previewing(now) or s.last_ms is None or s.last_ms > 250.0 * self.settings.frame_deadline_s:
+        if s.previewing(now) or s.last_ms is None or s.last_ms > QUEUE_MAX_MS:
             return room
         if any(c is not client and c.slot is client.slot and c.session.previewing(now)
                for c in self.clients.values()):
