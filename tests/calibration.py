@@ -15,6 +15,16 @@ from hand import cast, hand_rays
 
 W, H = 320, 180
 
+# Near the edge of the domain, 12.7 km from the origin: the scene is out of reach, the sky's
+# fog comes from layers placed by the eye, held and drifting with the wind at a late time
+# (t = 3.7e5 s); only the sky (-1) is checked.
+FAR_CAMERA = ({"position": (9000.0, 30.0, -9000.0), "yaw": -90.0, "pitch": 4.0, "fov": 60.0},
+              [{"kind": "sphere", "center": (8940.0, 34.0, -9003.0), "radius": 25.0, "density": 0.03},
+               {"kind": "cosine", "density": 0.004, "c0": 1.0, "scale": 3.0, "wind": True,
+                "terms": [{"amp": 0.9, "k": (0.3, 1.1, 0.2), "phase": 0.5}]},
+               {"kind": "height", "density": 0.002, "falloff": 0.05, "base": 20.0}],
+              {-1})
+
 
 def to_srgb(c):
     c = np.clip(c, 0, 1)

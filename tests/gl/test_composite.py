@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from calibration import calibration_still, check_pixels
+from calibration import FAR_CAMERA, calibration_still, check_pixels
 from fogbank.model.params import StillParams
 from fogbank.render.passes import FRAME_PASSES
 
@@ -120,13 +120,7 @@ def test_an_effect_changed_over_held_fog_redraws_the_held_inputs(renderer, chang
       {"kind": "cosine", "density": 0.002, "c0": 1.0, "scale": 30.0, "wind": True,
        "terms": [{"amp": 0.9, "k": (0.3, 1.1, 0.2), "phase": 0.5}]}],
      {0, 1, 2, 3, 4}),
-    # 12.7 km from the origin at a late time (test_renderer's far camera), held and moving layers
-    ({"position": (9000.0, 30.0, -9000.0), "yaw": -90.0, "pitch": 4.0, "fov": 60.0},
-     [{"kind": "sphere", "center": (8940.0, 34.0, -9003.0), "radius": 25.0, "density": 0.03},
-      {"kind": "cosine", "density": 0.004, "c0": 1.0, "scale": 3.0, "wind": True,
-       "terms": [{"amp": 0.9, "k": (0.3, 1.1, 0.2), "phase": 0.5}]},
-      {"kind": "height", "density": 0.002, "falloff": 0.05, "base": 20.0}],
-     {-1}),
+    FAR_CAMERA,   # 12.7 km out at a late time (tests/calibration.py)
 ])
 def test_held_frames_from_high_and_far_cameras_at_a_late_time(renderer, camera, layers, objects):
     still = calibration_still(layers=layers, camera=camera, time=3.7e5,

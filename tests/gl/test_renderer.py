@@ -12,7 +12,7 @@ from fogbank.scene import meshes as scenes
 from fogbank.kinds.reference import transmittance as reference
 from fogbank.model.params import StillParams
 from fogbank.model.fields import srgb_to_linear
-from calibration import H, W, calibration_still, srgb_to_linear_array
+from calibration import FAR_CAMERA, H, W, calibration_still, srgb_to_linear_array
 from calibration import check_pixels as _check_pixels
 from calibration import to_srgb as _to_srgb
 from hand import cast, hand_rays
@@ -69,14 +69,7 @@ def test_calibration_pixels_match_reference_blend(renderer, layers, effects):
      [{"kind": "height", "density": 0.01, "falloff": 0.01, "base": 0.0},
       {"kind": "sphere", "center": (-40.0, 200.0, -90.0), "radius": 60.0, "density": 0.01}],
      {0, 1, 2, 3, 4}),
-    # near the edge of the domain, 12.7 km from the origin: the scene is out of reach, the
-    # sky's fog comes from layers placed by the eye, drifting with the wind at a late time
-    ({"position": (9000.0, 30.0, -9000.0), "yaw": -90.0, "pitch": 4.0, "fov": 60.0},
-     [{"kind": "sphere", "center": (8940.0, 34.0, -9003.0), "radius": 25.0, "density": 0.03},
-      {"kind": "cosine", "density": 0.004, "c0": 1.0, "scale": 3.0, "wind": True,
-       "terms": [{"amp": 0.9, "k": (0.3, 1.1, 0.2), "phase": 0.5}]},
-      {"kind": "height", "density": 0.002, "falloff": 0.05, "base": 20.0}],
-     {-1}),
+    FAR_CAMERA,   # 12.7 km out at a late time (tests/calibration.py)
 ])
 def test_calibration_from_high_and_far_cameras(renderer, camera, layers, objects):
     still = calibration_still(layers=layers, camera=camera, time=3.7e5,

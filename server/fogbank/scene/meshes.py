@@ -240,6 +240,19 @@ def skirt_depths(errors: np.ndarray) -> np.ndarray:
     return (w + nb).ravel() + SKIRT_MARGIN
 
 
+def _lowered(verts: np.ndarray, n: int, ring: list[tuple[int, int]], depth: float,
+             first: int) -> tuple[dict[tuple[int, int], int], list[np.ndarray]]:
+    """Copies of the ring's grid vertices `depth` (m) lower, material SKIRT_MATERIAL,
+    numbered from `first`: (their index by (i, j), the rows)."""
+    rows = []
+    for i, j in ring:
+        v = verts[j * n + i].copy()
+        v[1] -= depth
+        v[9] = SKIRT_MATERIAL
+        rows.append(v)
+    return {p: first + k for k, p in enumerate(ring)}, rows
+
+
 def _skirt(n: int, ring: list[tuple[int, int]], lower: dict[tuple[int, int], int]) -> np.ndarray:
     """Two triangles down from each segment p-q of the ring to the lowered copies p', q'
     (vertex indices in `lower`): (p, q, q') and (p, q', p'), the last vertex (GL's
@@ -267,14 +280,9 @@ def _terrain_lods(verts: np.ndarray, n: int, first: int):
     at, next_vertex = first, len(verts)
     for k, rg in enumerate(ranges):
         ring = _ring(*rg, 1)
-        lower = {}
-        for i, j in ring:
-            v = verts[j * n + i].copy()
-            v[1] -= depth[k]
-            v[9] = SKIRT_MATERIAL
-            lower[(i, j)] = next_vertex
-            next_vertex += 1
-            lowered.append(v)
+        lower, rows = _lowered(verts, n, ring, depth[k], next_vertex)
+        next_vertex += len(rows)
+        lowered += rows
         row, counts = [], []
         for level, stride in enumerate(LOD_STRIDES):
             skirt = _skirt(n, _ring(*rg, stride), lower)
@@ -545,14 +553,7 @@ def build(name: str) -> Mesh:
     n = TERRAIN_CELLS
     edge = [k for k, (i0, i1, j0, j1) in enumerate(_chunk_ranges(n)) if min(i0, j0) == 0 or max(i1, j1) == n - 1]
     ring = _ring(0, n - 1, 0, n - 1, 1)
-    lower = {}
-    drop = []
-    for i, j in ring:
-        v = tv[j * n + i].copy()
-        v[1] -= float(err[edge].max()) + SKIRT_MARGIN
-        v[9] = SKIRT_MATERIAL
-        lower[(i, j)] = len(tv) + len(drop)
-        drop.append(v)
+    lower, drop = _lowered(tv, n, ring, float(err[edge].max()) + SKIRT_MARGIN, len(tv))
     far_skirt = (len(ti), 6 * len(ring))
     ti = np.concatenate([ti, _skirt(n, ring, lower).astype(np.uint32)])
     tv = np.concatenate([tv, np.array(drop, dtype=np.float32)])
