@@ -186,11 +186,30 @@ def test_oversized_message_closes_with_1009(client):
         assert code == 1009
 
 
-def test_two_sessions_are_served_round_robin(client):
-    with open_ws(client) as a, open_ws(client) as b:
-        for ws in (a, b):
+def test_sessions_read_at_once_share_the_worker(client):
+    """Three sessions, each read by its own thread for the same seconds, on the one
+    interactive worker: each gets a fair share. A playing stream's queued frame once
+    took every place its own frames freed, and a second session got no frame at all."""
+    import threading
+    sockets = [open_ws(client) for _ in range(3)]
+    counts = [0, 0, 0]
+    with sockets[0] as a, sockets[1] as b, sockets[2] as c:
+        for ws in (a, b, c):   # frames that cost more than 1/fps: the worker is never idle
             ws.receive_json(), ws.receive_json()
-            ws.send_json(VIEW)
-        fa, _ = frames_and_texts(a, 3)
-        fb, _ = frames_and_texts(b, 3)
-        assert len(fa) == 3 and len(fb) == 3
+            ws.send_json({**VIEW, "width": 640, "height": 360, "fps": 120})
+        frames_and_texts(a, 2)   # the worker warm and every session measured
+        stop = time.monotonic() + 4.0
+
+        def read(i, ws):
+            while time.monotonic() < stop:
+                m = ws.receive()
+                if m.get("bytes"):
+                    counts[i] += 1
+                    ws.send_json({"type": "ack", "frame": HEADER.unpack(m["bytes"][:HEADER.size])[1]})
+        threads = [threading.Thread(target=read, args=(i, ws)) for i, ws in enumerate((a, b, c))]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join(30)
+    assert min(counts) >= 5
+    assert min(counts) >= max(counts) // 2

@@ -84,3 +84,39 @@ def test_a_playing_stream_leaves_the_worker_to_a_session_that_previews():
     assert st.queue_room(playing, 0.0) == 1
     dragging.session.apply(parse('{"type": "interact", "active": false}'), 0.0)
     assert st.queue_room(playing, 1.0) == 2
+
+
+def _serve(st, clients, picks):
+    """Start `picks` frames as the scheduler does, the oldest frame on the worker ending
+    (drawn, sent, acknowledged) whenever none can start; the frames each session got."""
+    now, running, got = 0.0, [], {c.session.id: 0 for c in clients}
+    for _ in range(picks):
+        while True:
+            picked, _ = st._pick(now)
+            if picked is not None:
+                break
+            c, job = running.pop(0)
+            st.frames[c.slot.index] -= 1
+            c.session.frame_done(job, sent=True)
+            c.session.apply(parse(f'{{"type": "ack", "frame": {job.frame}}}'), now)
+        running.append((picked, picked.session.start_frame(now)))
+        st.frames[picked.slot.index] = st.frames.get(picked.slot.index, 0) + 1
+        got[picked.session.id] += 1
+        now += 0.01
+    return got
+
+
+def test_a_queued_frame_never_starves_another_session_on_the_worker():
+    # a measured playing stream may queue a frame; one not yet measured may not: it kept
+    # the worker full with its own frames and the other got none (4 clients: two at 0 fps)
+    st, playing = _streamer()
+    new = _client(st, "b", measured_ms=None)
+    got = _serve(st, [playing, new], 20)
+    assert got == {"a": 10, "b": 10}
+
+
+def test_playing_streams_on_one_worker_take_turns():
+    st, a = _streamer()
+    others = [_client(st, sid) for sid in "bcd"]
+    got = _serve(st, [a, *others], 40)
+    assert got == {"a": 10, "b": 10, "c": 10, "d": 10}

@@ -143,21 +143,35 @@ class Streamer:
         return room + 1
 
     def _pick(self, now: float) -> tuple[Client | None, float | None]:
-        """The next due client (whose worker has room) in round-robin order, else when
-        the earliest one is due."""
+        """The next due client whose worker has room, in round-robin order, else when the
+        earliest one is due. A worker's queued frame (queue_room's one more) goes only to a
+        session when no other session on that worker is due: a playing stream that kept its
+        worker full took every place freed by its own frames, and the other sessions on the
+        worker got none (4 clients on one worker: two got 0 frames a second)."""
         clients = list(self.clients.values())
+        order = [clients[(self._rr + i) % len(clients)] for i in range(len(clients))]
         soonest = None
-        for i in range(len(clients)):
-            c = clients[(self._rr + i) % len(clients)]
-            if self.frames.get(c.slot.index, 0) >= self.queue_room(c, now):
-                continue   # a finished frame wakes the scheduler
+        waiting: set[int] = set()   # workers with a due session that its room holds back
+        queued: list[Client] = []   # due sessions that may take a worker's queued place
+        for c in order:
             due = c.session.next_due(now)
             if due is None:
                 continue
-            if due <= now:
-                self._rr = (self._rr + i + 1) % max(1, len(clients))
+            if due > now:
+                soonest = due if soonest is None else min(soonest, due)
+                continue
+            on = self.frames.get(c.slot.index, 0)
+            if on < self.frames_per_worker:
+                self._rr = (clients.index(c) + 1) % len(clients)
                 return c, None
-            soonest = due if soonest is None else min(soonest, due)
+            if on < self.queue_room(c, now):
+                queued.append(c)
+            else:
+                waiting.add(c.slot.index)
+        for c in queued:   # in round-robin order too: playing streams take turns
+            if c.slot.index not in waiting:
+                self._rr = (clients.index(c) + 1) % len(clients)
+                return c, None
         return None, soonest
 
     async def _run(self) -> None:
