@@ -35,8 +35,9 @@ class Settings(BaseSettings):
     frame_deadline_s: float = Field(10.0, gt=0, le=600, description="deadline of one stream frame")
     queue_timeout_s: float = Field(30.0, gt=0, le=3600, description="longest wait for a worker "
                                    "before a job starts; beyond, 503")
-    worker_cache_mb: int = Field(192, ge=16, le=65536, description="GL cache budget of each worker "
-                                 "(render targets and cached scene passes), MiB")
+    worker_cache_mb: int = Field(256, ge=16, le=65536, description="GL cache budget of each worker "
+                                 "(render targets and cached scene passes), MiB: two streams' scene "
+                                 "passes at 1280x720 or ten at 640x360")
     batch_cache_mb: int = Field(128, ge=16, le=65536, description="GL cache budget of each batch "
                                 "worker, MiB (stills rarely reuse a cached scene pass)")
     worker_memory_mb: int = Field(768, ge=128, le=262144, description="resident memory above which "

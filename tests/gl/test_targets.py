@@ -53,3 +53,72 @@ def test_a_new_scene_pass_lists_its_own_tiles(renderer):
     expected = _expected(g)
     assert not np.array_equal(expected, first)
     assert np.array_equal(_listed(renderer, g), expected)
+
+
+def _cached_frames(r, slots: list[str], rounds: int, now: list[float], step: float = 0.05,
+                   orbiting=()) -> dict[str, int]:
+    """Frames of each slot, drawn in turn for `rounds`, the clock moving `step` s a frame
+    (the slots in `orbiting` turning their camera a degree a frame); how many found their
+    scene pass cached."""
+    still = StillParams.model_validate({**preset_dict("default"), "width": 160, "height": 90})
+    hits = {s: 0 for s in slots}
+    for i in range(rounds):
+        for s in slots:
+            look = still
+            if s in orbiting:
+                look = still.model_copy(update={"camera": still.camera.model_copy(update={"yaw": float(i)})})
+            f = r.begin(look, s, True)
+            hits[s] += f.scene_cached
+            for p in FRAME_PASSES:
+                p.run(r, f)
+            r.keep_only(f)
+            now[0] += step
+    return hits
+
+
+def _budget(renderer, scene_passes: float) -> int:
+    """A cache budget of one 160x90 frame's scratch targets and `scene_passes` of its scene passes."""
+    from fogbank.render.renderer import Renderer
+    probe = Renderer(renderer.ctx, cache_bytes=1 << 30)
+    _cached_frames(probe, ["probe"], 1, [0.0])
+    t = probe.caches.targets(160, 90).nbytes()
+    g = probe.caches.nbytes() - t   # the one scene pass
+    probe.release_caches()
+    return int(t + scene_passes * g)
+
+
+def test_sessions_drawn_in_turn_keep_the_scene_passes_that_fit(renderer):
+    """Three sessions drawn in turn where two scene passes fit: the two that hold one keep
+    it and only the third redraws. Least-recently-used evicted at each frame the scene
+    pass the next frame needed: no frame found its own (0 hits of 12)."""
+    from fogbank.render.renderer import Renderer
+    now = [0.0]
+    r = Renderer(renderer.ctx, cache_bytes=_budget(renderer, 2.5), clock=lambda: now[0])
+    hits = _cached_frames(r, ["a", "b", "c"], 5, now)
+    assert hits == {"a": 4, "b": 4, "c": 0}   # each slot's first frame draws its scene pass
+    r.release_caches()
+
+
+def test_a_session_that_stops_drawing_gives_its_scene_pass_to_one_that_draws(renderer):
+    """A scene pass no frame asked for in ACTIVE_S goes first: after 'a' stops, 'c' (which
+    could not keep one while both others drew) keeps its own."""
+    from fogbank.render.renderer import Renderer
+    from fogbank.render.targets import ACTIVE_S
+    now = [0.0]
+    r = Renderer(renderer.ctx, cache_bytes=_budget(renderer, 2.5), clock=lambda: now[0])
+    _cached_frames(r, ["a", "b", "c"], 2, now)
+    now[0] += ACTIVE_S + 0.1
+    hits = _cached_frames(r, ["b", "c"], 3, now)
+    assert hits == {"b": 3, "c": 2}
+    r.release_caches()
+
+
+def test_a_session_whose_camera_moves_leaves_its_place_to_one_that_reuses_it(renderer):
+    """'a' orbits (each frame redraws its scene pass), 'b' and 'c' hold still, two scene
+    passes fit: 'a' came first, but keeping its pass saves nothing, so 'c' takes it."""
+    from fogbank.render.renderer import Renderer
+    now = [0.0]
+    r = Renderer(renderer.ctx, cache_bytes=_budget(renderer, 2.5), clock=lambda: now[0])
+    hits = _cached_frames(r, ["a", "b", "c"], 5, now, orbiting={"a"})
+    assert hits == {"a": 0, "b": 4, "c": 3}   # 'c' finds its pass from its third frame
+    r.release_caches()

@@ -9,6 +9,7 @@ change. The transmittance API (render/rays.py) shares the programs and the fog p
 
 from __future__ import annotations
 
+import time
 from concurrent.futures import ThreadPoolExecutor
 
 import moderngl
@@ -27,7 +28,7 @@ CACHE_BYTES = 256 << 20   # default byte budget of the GL caches (targets and sc
 
 
 class Renderer:
-    def __init__(self, ctx: moderngl.Context, cache_bytes: int = CACHE_BYTES):
+    def __init__(self, ctx: moderngl.Context, cache_bytes: int = CACHE_BYTES, clock=time.monotonic):
         self.ctx = ctx
         self.programs = Programs(ctx)
         self.sky_prog = self.programs.get("passes/sky.vert", "passes/sky.frag")
@@ -40,7 +41,7 @@ class Renderer:
         self.shadow = ShadowMap(ctx)
         self.noise = NoiseTiles(ctx)
         self.particles = particle_texture(ctx)
-        self.caches = TargetCache(ctx, cache_bytes)
+        self.caches = TargetCache(ctx, cache_bytes, clock)
         self.sims = Simulations()
         self.rays = RayCaster(self)
         self._prep = ThreadPoolExecutor(1, thread_name_prefix="fog-plan")
@@ -57,6 +58,7 @@ class Renderer:
         key = (still.scene, still.camera, still.sun, msaa)
         # a preview happily reuses a full-quality scene pass
         cached = g.scene_key == key or (not msaa and g.scene_key == key[:3] + (True,))
+        g.last_frame = "reused" if cached else ("new" if g.scene_key is None else "redrawn")
         # the plan's split (FogPlan.split) is what asks the fog pass to hold
         plan = self._prep.submit(plan_fog, still, still.time, view.eye, self.sims, hold_fog and cached)
         return Frame(still=still, slot=slot, msaa=msaa, view=view,
