@@ -1,7 +1,8 @@
 """The G-buffer's list of silhouette tiles (render/targets.py GBuffer.silhouette_tiles):
-the tiles the composite's second draw covers, against the tiles computed in numpy from
-the resolve's far surfaces (a pixel sees two surfaces where the near one's coverage, in
-the far colour's alpha, is below 1), listed anew for each scene pass drawn."""
+the tiles the composite's second draw covers, as runs along the tile rows, against the
+tiles computed in numpy from the resolve's far surfaces (a pixel sees two surfaces where
+the near one's coverage, in the far colour's alpha, is below 1), listed anew for each
+scene pass drawn; and the worker caches' eviction order (TargetCache.eviction_order)."""
 
 from __future__ import annotations
 
@@ -36,8 +37,12 @@ def _expected(g) -> np.ndarray:
 
 
 def _listed(renderer, g) -> np.ndarray:
+    """The tiles the listed runs cover, each run within one row of the tile grid."""
     tex, count = g.silhouette_tiles(renderer.ctx)
-    return np.frombuffer(tex.read(), np.int32)[:count]
+    runs = np.frombuffer(tex.read(), np.int32).reshape(-1, 2)[:count]
+    cols = g.tiles.width
+    assert all(start % cols + n <= cols and n >= 1 for start, n in runs)
+    return np.concatenate([np.arange(start, start + n) for start, n in runs] or [np.zeros(0, int)])
 
 
 def test_the_listed_tiles_are_those_with_a_pixel_of_two_surfaces(renderer):
@@ -45,6 +50,7 @@ def test_the_listed_tiles_are_those_with_a_pixel_of_two_surfaces(renderer):
     expected = _expected(g)
     assert len(expected) > 20   # the default view has silhouettes: trees, the house, the hills
     assert np.array_equal(_listed(renderer, g), expected)
+    assert g.tile_count < len(expected) / 2   # runs along the rows, not one quad a tile
 
 
 def test_a_new_scene_pass_lists_its_own_tiles(renderer):

@@ -14,7 +14,7 @@ from fogbank.render.gl import release_fbo
 
 MSAA_SAMPLES = 4
 TILE_LIST_WIDTH = 256   # texels a row of GBuffer.tile_list
-SILHOUETTE_TILE = 8   # px: the composite redoes pixels with two surfaces by tiles of this size
+SILHOUETTE_TILE = 4   # px: the composite redoes pixels with two surfaces by tiles of this size
 # bytes per pixel of each GPU allocation (for the caches' byte budgets and the cost model)
 OUT_BPP = 4                                   # RGBA8 output renderbuffer
 MSAA_BPP = MSAA_SAMPLES * (8 + 4 + 4)         # RGBA16F + R32F + depth24/stencil8, per sample
@@ -161,8 +161,8 @@ class GBuffer:
     scene_key: object = None
     mips_key: object = None        # the scene pass whose mip pyramid the textures hold
     two_surfaces: bool = False     # the far textures hold this scene pass's far surfaces
-    tile_list: moderngl.Texture | None = None   # R32I: the marked tiles' indices (silhouette_tiles)
-    tile_count: int = -1           # how many; -1: not listed since the tiles were drawn
+    tile_list: moderngl.Texture | None = None   # RG32I: runs of marked tiles (silhouette_tiles)
+    tile_count: int = -1           # how many runs; -1: not listed since the tiles were drawn
     held: dict[int, HeldFog] = field(default_factory=dict)   # by fog scale
     # what the latest frame did with it (Renderer.begin): "new" (made for it), "redrawn"
     # (another scene pass drawn over it) or "reused" (its scene pass as it was)
@@ -210,7 +210,7 @@ class GBuffer:
         if self.mips_key is not None:   # the colour's (and sunlight's) mip pyramid: a third more
             n += self.color.width * self.color.height * (8 + (SUNLIGHT_BPP if self.sunlight else 0)) // 3
         if self.tile_list is not None:
-            n += self.tile_list.width * self.tile_list.height * 4
+            n += self.tile_list.width * self.tile_list.height * 8
         return n + sum(h.nbytes() for h in self.held.values())
 
     @property
@@ -218,25 +218,29 @@ class GBuffer:
         return self.tiles_fbo.color_attachments[0]
 
     def silhouette_tiles(self, ctx: moderngl.Context) -> tuple[moderngl.Texture | None, int]:
-        """The tiles that hold a pixel with two surfaces, as a list: (an R32I texture of
-        their indices into `tiles`, row-major, TILE_LIST_WIDTH a row; how many). Read back
-        once per scene pass (a few kB): the composite's second draw then makes one quad per
-        marked tile, where one instance per tile, each reading `tiles` to collapse if
-        unmarked, cost its vertex stage 2.5 ms at 1280x720 for about 7% of the tiles."""
+        """The tiles that hold a pixel with two surfaces, as runs along the tile rows: (an
+        RG32I texture of (first tile's index into `tiles`, row-major; tiles in the run),
+        TILE_LIST_WIDTH runs a row; how many runs). Read back once per scene pass (a few
+        kB). The composite's second draw makes one quad per run: llvmpipe pays each small
+        quad's setup and binning, about 4 us, and a silhouette marks its tiles in rows
+        (1045 marked tiles of the default view at 1280x720 make 231 runs)."""
         if self.tile_count < 0:
             marks = np.frombuffer(self.tiles.read(), np.uint8)
-            marks = marks.reshape(self.tiles.height, self.tiles.width)   # read with alignment 1
-            index = np.flatnonzero(marks.ravel() >= 128).astype(np.int32)
-            self.tile_count = len(index)
-            rows = max(1, -(-len(index) // TILE_LIST_WIDTH))
+            marks = marks.reshape(self.tiles.height, self.tiles.width) >= 128   # read with alignment 1
+            edges = np.diff(np.pad(marks.astype(np.int8), ((0, 0), (1, 1))), axis=1)
+            r0, c0 = np.nonzero(edges == 1)     # a run's first tile (row by row, left to right)
+            r1, c1 = np.nonzero(edges == -1)    # one past its last
+            runs = np.stack([r0 * marks.shape[1] + c0, c1 - c0], axis=1).astype(np.int32)
+            self.tile_count = len(runs)
+            rows = max(1, -(-len(runs) // TILE_LIST_WIDTH))
             if self.tile_list is None or self.tile_list.height < rows:
                 if self.tile_list is not None:
                     self.tile_list.release()
-                self.tile_list = ctx.texture((TILE_LIST_WIDTH, rows), 1, dtype="i4")
+                self.tile_list = ctx.texture((TILE_LIST_WIDTH, rows), 2, dtype="i4")
                 self.tile_list.filter = (moderngl.NEAREST, moderngl.NEAREST)
-            if len(index):
-                data = np.zeros(rows * TILE_LIST_WIDTH, np.int32)
-                data[:len(index)] = index
+            if len(runs):
+                data = np.zeros((rows * TILE_LIST_WIDTH, 2), np.int32)
+                data[:len(runs)] = runs
                 self.tile_list.write(data.tobytes(), viewport=(0, 0, TILE_LIST_WIDTH, rows))
         return self.tile_list, self.tile_count
 
