@@ -134,7 +134,8 @@ def cmd_bench_stream(args) -> None:
 
 def cmd_bench(args) -> None:
     from fogbank.tools.bench import run
-    run(args.out, quick=args.quick, only_targets=args.targets_only, before=args.before)
+    run(args.out, quick=args.quick, only_targets=args.targets_only, before=args.before,
+        before_tree=args.before_tree)
 
 
 def cmd_soak(args) -> None:
@@ -178,6 +179,8 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--targets-only", action="store_true",
                    help="measure issue 13's targets only (and the analytic/raymarch section); writes bench.json")
     p.add_argument("--before", help="a bench.json of another version: its targets become the 'before' column")
+    p.add_argument("--before-tree", help="another checkout's server/ folder: its server is run in turn with this "
+                   "one's in each round of the delivered frame rates (the 'before' column for them)")
     p.set_defaults(fn=cmd_bench)
     p = sub.add_parser("soak", help="N streaming clients for a while; memory, frames, errors")
     p.add_argument("--clients", type=int, default=8)

@@ -76,6 +76,18 @@ def test_the_targets_table_reads_each_figure_and_judges_it_against_its_target():
                 "analytic": {"cosine": 12.0, "potential": 9.0}}
     res = {"targets": figures(30.0, 240.0, 3.5), "before": {"version": "abc", "targets": figures(9.8, 900.0, 1.2)}}
     md = "\n".join(targets_markdown(res))
+    # the delivered figures of an earlier code's server run in the same rounds replace the
+    # separate run's, and get a table of their own with every round and the ratio
+    t = figures(30.0, 240.0, 3.5)
+    t["drag_1280x720"]["rounds"] = [28.0, 30.0, 35.0]
+    t["before_interleaved"] = {"tree": "/tmp/before/server",
+                               **{k: {"fps": v, "rounds": [v - 1, v, v + 2]} for k, v in
+                                  (("drag_1280x720", 20.0), ("still_1280x720", 25.0), ("drag_640x360", 16.0))}}
+    md2 = "\n".join(targets_markdown({"targets": t, "before": res["before"]}))
+    assert "| 1280x720 orbiting, delivered to a dragging client | 20.0 fps | 30.0 fps | >= 24 fps | yes |" in md2
+    assert "| drag_1280x720 | 30.0 | 28.0, 30.0, 35.0 | 640 | 40 |" in md2
+    assert "| drag_1280x720 | 20.0 | 19.0, 20.0, 22.0 | 30.0 | 28.0, 30.0, 35.0 | 1.50 |" in md2
+    assert "| 16 layers, 960x540: control-to-frame p95, worst look | 900.0 ms | 240.0 ms | <= 250 ms | yes |" in md2
     assert "| 1280x720 orbiting, delivered to a dragging client | 9.8 fps | 30.0 fps | >= 24 fps | yes |" in md
     assert "| 1280x720, still camera, delivered | 41.0 fps | 41.0 fps | >= 40 fps | yes |" in md
     assert "| 640x360 orbiting, delivered to a dragging client | 20.0 fps | 20.0 fps | >= 50 fps | no |" in md
