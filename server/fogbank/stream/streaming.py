@@ -4,7 +4,7 @@ workers among sessions, and the /ws endpoint.
 Each session is pinned to one interactive worker (the one with the fewest sessions), so
 its cached scene pass stays where its frames are drawn. The scheduler starts a frame for
 the next due session in round-robin order, with at most `frames_per_worker` frames on
-each worker (and one more queued behind a session's own: Streamer.queue_room). Each frame
+each worker (and one more for a stream that only plays: Streamer.queue_room). Each frame
 is a snapshot of its session (latest wins); the worker renders and JPEG-encodes it, and
 the bytes go out as header + JPEG. A session never has more than MAX_IN_FLIGHT frames
 unacknowledged, so a slow client gets fewer frames, never older ones.
@@ -35,14 +35,14 @@ from fogbank.service import metrics
 from fogbank.workers import worker
 from fogbank.stream.protocol import (FLAG_FULL, FLAG_PLAYING, FLAG_REDUCED, MAX_MESSAGE, PROTOCOL, ProtocolError, QueryMsg,
                        frame_header, parse)
-from fogbank.stream.session import PLAY_BUDGET_MS, PREVIEW_BUDGET_MS, REFINE_BUDGET_MS, FrameJob, Session
+from fogbank.stream.session import PLAY_BUDGET_MS, REFINE_BUDGET_MS, FrameJob, Session
 from fogbank.workers.supervisor import DeadlineExceeded, Slot, Supervisor, WorkerError
 
 log = logging.getLogger("fogbank.stream")
 
 
-IDLE_CLOSE = 4408   # closed for inactivity (no messages, or frames left unacknowledged)
-QUEUE_MAX_MS = 60.0   # a full frame costlier than this is never queued behind another (Streamer.queue_room)
+IDLE_CLOSE = 4408
+QUEUE_MAX_MS = 60.0   # a frame costlier than this is never queued behind another (Streamer.queue_room)   # closed for inactivity (no messages, or frames left unacknowledged)
 
 
 class Client:
@@ -55,7 +55,6 @@ class Client:
         self.closed = False
         self.last_message = now
         self.unacked_since: float | None = None   # oldest frame sent and not yet acknowledged
-        self.on_worker = 0        # this session's frames on its worker (started, not yet returned)
 
     async def send_json(self, msg: dict[str, Any]) -> None:
         # ASCII JSON: user text echoed in an error (a field name, a value) may hold lone
@@ -123,27 +122,21 @@ class Streamer:
 
     def queue_room(self, client: Client, now: float) -> int:
         """How many frames may be on the worker when one of `client`'s starts:
-        `frames_per_worker`, and one more behind the session's own. A frame queued behind
-        the one being drawn starts the moment that one ends, so the worker does not idle
-        through the hand-over between frames (the result's trip to this process, the next
-        job's back: 1 ms a frame here while playing, 3.6 ms while dragging, where each
-        frame waited for the one before it to come back). The price is a frame of latency:
-        the queued frame is the session as it was when queued. So not before the session's
-        frames are measured, and not when they take over QUEUE_MAX_MS (a preview, over
-        PREVIEW_BUDGET_MS): a preview that input starts can wait behind a queued full
-        frame, so that is the most latency the queue adds to it (a look of 16 layers whose
-        full frames took 700 ms kept a drag's first previews 1.4 s behind), and a look that
-        passes the frame deadline never has a second frame waiting to run on the restarted
-        worker. A preview queues only behind the session's own frame. Not while another
-        session on the worker previews (its preview would wait behind this one's), nor,
-        _pick's rule, while another session on it is due."""
+        `frames_per_worker`, and one more for a stream that only plays. A frame queued
+        behind the one being drawn starts the moment that one ends, so the worker does not
+        idle through the hand-over between frames (the result's trip to this process, the
+        next job's back: 4-6 ms a frame here), at a frame of latency. Not for a preview (a
+        drag's frame shows the newest camera); not while another session on the worker
+        previews (its preview starts only on an idle worker, which a playing stream would
+        keep full); not before the session's frames are measured, nor when they take over
+        QUEUE_MAX_MS: a preview that input starts can wait behind the queued frame, so
+        that is the most latency the queue adds to it (a look of 16 layers whose full frames
+        took 700 ms kept a drag's first previews 1.4 s behind), and a look that passes the
+        frame deadline never has a second frame waiting to run on the restarted worker."""
         s = client.session
         room = self.frames_per_worker
-        preview = s.previewing(now)
-        if s.last_ms is None or s.last_ms > (PREVIEW_BUDGET_MS if preview else QUEUE_MAX_MS):
+        if s.previewing(now) or s.last_ms is None or s.last_ms > QUEUE_MAX_MS:
             return room
-        if preview and self.frames.get(client.slot.index, 0) > client.on_worker:
-            return room   # a preview queues behind its own frame only: not a camera older than another's frame
         if any(c is not client and c.slot is client.slot and c.session.previewing(now)
                for c in self.clients.values()):
             return room
@@ -189,7 +182,6 @@ class Streamer:
             if client is not None:
                 job = client.session.start_frame(now)
                 self.frames[client.slot.index] = self.frames.get(client.slot.index, 0) + 1
-                client.on_worker += 1
                 asyncio.get_running_loop().create_task(self._produce(client, job))
                 continue
             timeout = None if soonest is None else max(0.0, soonest - now)
@@ -210,7 +202,6 @@ class Streamer:
                 slot.drew(cost.program_key(job.still))
             finally:
                 self.frames[slot.index] -= 1
-                client.on_worker -= 1
                 self.wake()
             render_ms, encode_ms = out["render_ms"], out["encode_ms"]
             s.measured(job, render_ms, self.clock(), once=bool(out.get("once")))
