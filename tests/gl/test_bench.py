@@ -38,6 +38,15 @@ def test_markdown_report_from_results():
                             "server_rss_mb": 600.0}],
            "stills_ms": {"png": 100.0, "jpg": 50.0, "webp": 80.0}}
     md = markdown(res)
+    assert "| 1 | 640x360 | 50.0 | 50.0 - 50.0 | 1.00 | 600 |" in md
+    # an earlier code's server, run right after: its figures beside each row
+    res["concurrency"].append({"clients": 2, "size": "1280x720", "per_client_fps": [10.0, 12.0],
+                               "aggregate_fps": 22.0, "fairness": 0.83, "server_rss_mb": 700.0})
+    res["concurrency_before"] = [{"clients": 2, "size": "1280x720", "per_client_fps": [0.0, 5.5],
+                                  "aggregate_fps": 5.5, "fairness": 0.0, "server_rss_mb": 650.0}]
+    md = markdown(res)
+    assert "| 2 | 1280x720 | 22.0 | 10.0 - 12.0 | 0.83 | 700 | 5.5 | 0.0 - 5.5 |" in md
+    assert "| 1 | 640x360 | 50.0 | 50.0 - 50.0 | 1.00 | 600 | - | - |" in md
     assert "| sphere | 2.0 | 1.0e-05 | 100 | 30.0 | 15.0x |" in md
     assert "| Constant | 800x600 | 9.0 | 512x512 | 6.6 |" in md
     assert "| 640x360 | 30 | 40 | 50 |" in md

@@ -454,20 +454,27 @@ def streaming(r: Renderer, srv: ChildServer, seconds: float) -> list[dict]:
     return rows
 
 
+CONCURRENCY = ((1, 640, 360), (2, 640, 360), (4, 640, 360), (8, 640, 360), (2, 1280, 720), (4, 1280, 720))
+
+
 def concurrency(srv: ChildServer, seconds: float) -> list[dict]:
+    """Clients streaming the default look at once from one server (one render worker):
+    each client's fps, their sum, the slowest over the fastest, and the process tree's
+    memory. Sessions drawn in turn must each get a share, and must not push each other's
+    scene passes out of the worker's cache at every frame."""
     from fogbank.tools.bench_stream import delivered_fps
     ws = srv.url.replace("http", "ws", 1)
     rows = []
-    for n in (1, 2, 4, 8):
+    for n, w, h in CONCURRENCY:
         async def run_all():
-            return await asyncio.gather(*[delivered_fps(ws, "v=1", 640, 360, seconds=seconds)
+            return await asyncio.gather(*[delivered_fps(ws, "v=1", w, h, seconds=seconds)
                                           for _ in range(n)])
         res = asyncio.run(run_all())
         fps = [x["fps"] for x in res]
-        row = {"clients": n, "per_client_fps": fps, "aggregate_fps": sum(fps),
+        row = {"clients": n, "size": f"{w}x{h}", "per_client_fps": fps, "aggregate_fps": sum(fps),
                "fairness": min(fps) / max(fps) if max(fps) > 0 else 0.0, "server_rss_mb": srv.rss_mb()}
         rows.append(row)
-        print(f"  {n} clients: aggregate {row['aggregate_fps']:.1f} fps, per client "
+        print(f"  {n} clients at {w}x{h}: aggregate {row['aggregate_fps']:.1f} fps, per client "
               f"{min(fps):.1f}..{max(fps):.1f}, fairness {row['fairness']:.2f}, RSS {row['server_rss_mb']:.0f} MB")
     return rows
 
@@ -560,12 +567,19 @@ def run(out_dir: str = "docs", quick: bool = False, only_targets: bool = False,
     try:
         print("4. streaming (default preset)")
         res["streaming"] = streaming(r, srv, seconds)
-        print("5. concurrency (640x360)")
+        print("5. concurrency")
         res["concurrency"] = concurrency(srv, seconds)
         print("6. stills over HTTP")
         res["stills_ms"] = stills(srv)
     finally:
         srv.stop()
+    if before_tree:
+        srv = ChildServer(env={"PYTHONPATH": str(Path(before_tree).resolve())})
+        try:
+            print(f"5. concurrency, the earlier code ({before_tree})")
+            res["concurrency_before"] = concurrency(srv, seconds)
+        finally:
+            srv.stop()
     print("7. the process boundary (web process <-> render worker)")
     res["process_boundary"] = process_boundary()
     Path(out_dir).mkdir(parents=True, exist_ok=True)
@@ -715,12 +729,24 @@ def markdown(res: dict) -> str:
         if "latency" in row:
             lat = row["latency"]
             L.append(f"| {row['size']} | {lat['p50_ms']:.0f} | {lat['p95_ms']:.0f} | {lat['p99_ms']:.0f} |")
-    L += ["", "## 5. Concurrency (640x360)", "",
-          "| clients | aggregate fps | per client fps | slowest / fastest | server RSS MB |", "|---|---|---|---|---|"]
+    before = {(row["clients"], row.get("size", "640x360")): row for row in res.get("concurrency_before", [])}
+    L += ["", "## 5. Concurrency", "",
+          "Clients streaming the default look at once from one server (one render worker), camera still, "
+          "time running" + (", and the same from a server of the earlier code run right after" if before else "")
+          + ":", "",
+          "| clients | size | aggregate fps | per client fps | slowest / fastest | server RSS MB |"
+          + (" before: aggregate fps | per client fps |" if before else ""),
+          "|---|---|---|---|---|---|" + ("---|---|" if before else "")]
     for row in res["concurrency"]:
         fps = row["per_client_fps"]
-        L.append(f"| {row['clients']} | {row['aggregate_fps']:.1f} | {min(fps):.1f} - {max(fps):.1f} | "
-                 f"{row['fairness']:.2f} | {row['server_rss_mb']:.0f} |")
+        size = row.get("size", "640x360")
+        line = (f"| {row['clients']} | {size} | {row['aggregate_fps']:.1f} | {min(fps):.1f} - {max(fps):.1f} | "
+                f"{row['fairness']:.2f} | {row['server_rss_mb']:.0f} |")
+        b = before.get((row["clients"], size))
+        if before:
+            line += (f" {b['aggregate_fps']:.1f} | {min(b['per_client_fps']):.1f} - {max(b['per_client_fps']):.1f} |"
+                     if b else " - | - |")
+        L.append(line)
     s = res["stills_ms"]
     L += ["", "## 6. Stills (1920x1080, over HTTP, uncached)", "", "| format | ms |", "|---|---|"]
     L += [f"| {k} | {v:.0f} |" for k, v in s.items()]
