@@ -140,3 +140,27 @@ def test_a_stuck_worker_is_replaced_when_its_probes_never_start():
         assert out["pid"] != old
         assert sup.live()[0] is True
     run(body, Settings(probe_interval_s=0.2, probe_deadline_s=0.5, liveness_s=1.0, worker_start_s=1.0))
+
+
+def test_a_stream_frame_says_whether_the_worker_held_its_scene_pass():
+    """worker.frame's `scene_reused` (stream/session.py learns from it that the worker's
+    cache let its scene pass go): a session's first frame draws its scene pass, its next
+    with the camera still finds it, a new camera draws it again, and after the worker
+    drops the session's caches the same camera draws it again too. A view that teaches
+    says nothing."""
+    from fogbank.model.params import StillParams
+    from fogbank.model.presets import preset_dict
+    look = StillParams.model_validate({**preset_dict("default"), "width": 160, "height": 90})
+    turned = look.model_copy(update={"camera": look.camera.model_copy(update={"yaw": look.camera.yaw + 10})})
+
+    async def body(sup: Supervisor):
+        slot = sup.interactive.slots[0]
+
+        async def reused(still, show="shaded"):
+            out = await sup.call(slot, worker.frame, still, "s", True, 80, show, 0, False, deadline=30)
+            return out["scene_reused"]
+        got = [await reused(look), await reused(look), await reused(turned), await reused(turned)]
+        await sup.call(slot, worker.drop_slot, "s", deadline=30)
+        got += [await reused(turned), await reused(turned, "transmittance")]
+        return got
+    assert run(body, Settings()) == [False, True, False, True, False, None]

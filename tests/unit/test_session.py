@@ -433,3 +433,40 @@ def test_only_full_frames_while_time_runs_ask_to_hold_the_fog():
     s.apply(msg('{"type": "params", "params": {"layers": [%s]}}' % windy), 3.0)
     job = s.start_frame(3.0 + 2 * INPUT_SETTLE_S)
     assert job.full and not job.hold_fog       # 15 cosine layers of 8 terms under a moving one: slow to compile
+
+
+def test_a_scene_pass_the_worker_let_go_is_estimated_drawn_and_calibrates_nothing():
+    """Found measuring four 1280x720 streams on one worker, two of whose scene passes its
+    cache holds: the others' frames were estimated with their scene pass held (25 ms),
+    measured drawing it with MSAA (230 ms), and calibrated nine times over. A frame the
+    worker says it drew its scene pass for (scene_reused False) makes the next frames at
+    that size estimated with the scene drawn, and calibrates nothing; one that finds it
+    held again ends that."""
+    from fogbank.workers.cost import estimate
+    s = Session("a", now=0.0)
+    s.apply(msg('{"type": "view", "width": 960, "height": 540}'), 0.0)
+    s.cost_ratio, s.calibrated = 0.5, True   # as if measured: the first frame is the full look
+
+    def frame(t, ms, reused):
+        job = s.start_frame(t)
+        s.frame_done(job, sent=True)
+        s.apply(msg('{"type": "ack", "frame": %d}' % job.frame), t)
+        s.measured(job, ms, t, scene_reused=reused)
+        return job
+
+    first = frame(1.0, 200.0, False)
+    assert not first.scene_cached and first.msaa
+    ratio = s.cost_ratio
+    held = frame(1.1, 230.0, False)     # estimated over a held scene pass; the worker drew it
+    assert held.scene_cached
+    assert held.estimate_ms == estimate(held.still, msaa=True, compiled=True, scene_cached=True).seconds * 1000
+    assert s.cost_ratio == ratio
+    lost = frame(1.2, 230.0, False)     # estimated with its scene pass drawn: a calibration
+    assert not lost.scene_cached
+    assert lost.estimate_ms == estimate(lost.still, msaa=lost.msaa, compiled=True).seconds * 1000
+    assert abs(s.cost_ratio - (ratio * 230.0 / lost.estimate_ms) ** 0.5) < 1e-9   # smoothed
+    ratio = s.cost_ratio
+    found = frame(1.3, 30.0, True)      # the worker held it after all: no calibration
+    assert not found.scene_cached and s.cost_ratio == ratio
+    again = frame(1.4, 30.0, True)
+    assert again.scene_cached

@@ -42,6 +42,9 @@ class Renderer:
         self.noise = NoiseTiles(ctx)
         self.particles = particle_texture(ctx)
         self.caches = TargetCache(ctx, cache_bytes, clock)
+        # whether the latest frame's scene pass was the cached one (begin): a stream's
+        # session learns from it that the cache let its scene pass go (stream/session.py)
+        self.scene_reused = False
         self.sims = Simulations()
         self.rays = RayCaster(self)
         self._prep = ThreadPoolExecutor(1, thread_name_prefix="fog-plan")
@@ -59,6 +62,7 @@ class Renderer:
         # a preview happily reuses a full-quality scene pass
         cached = g.scene_key == key or (not msaa and g.scene_key == key[:3] + (True,))
         g.last_frame = "reused" if cached else ("new" if g.scene_key is None else "redrawn")
+        self.scene_reused = cached
         # the plan's split (FogPlan.split) is what asks the fog pass to hold
         plan = self._prep.submit(plan_fog, still, still.time, view.eye, self.sims, hold_fog and cached)
         return Frame(still=still, slot=slot, msaa=msaa, view=view,

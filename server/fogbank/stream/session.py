@@ -112,6 +112,7 @@ class FrameJob:
     estimate_ms: float = 0.0   # its estimated render time (workers/cost.py, uncalibrated)
     reduced: bool = False  # a refinement below the look's quality (Session._refinement)
     hold_fog: bool = False  # the worker keeps the fog's time-invariant part (Session._holds_fog)
+    scene_cached: bool = False  # its estimate took the worker to hold its scene pass (Session._scene_cached)
 
 
 class Session:
@@ -143,6 +144,10 @@ class Session:
         # the scene pass this session's worker holds at each frame size: (scene, camera, sun,
         # sunlight target) and whether with MSAA (render/targets.py keeps one per slot and size)
         self.scenes: dict[tuple[int, int], tuple[tuple, bool]] = {}
+        # the sizes whose scene pass the worker let go although this session drew it last
+        # (its cache outgrew its budget, render/targets.py): until a frame finds it held
+        # again, frames are estimated with their scene pass drawn (measured)
+        self.scenes_lost: set[tuple[int, int]] = set()
         # at each size, the held-fog key of the last frame (_held_fog_of; render/passes/fog.py)
         # and how many frames in a row asked for it over a held scene pass
         self.fogs: dict[tuple[int, int], tuple[tuple, int]] = {}
@@ -348,8 +353,9 @@ class Session:
     def _scene_cached(self, still: StillParams, msaa: bool) -> bool:
         """Whether the worker holds this frame's scene pass: the last frame at its size drew
         the same scene, camera and sun (a frame without MSAA reuses one with it)."""
-        drawn = self.scenes.get((still.width, still.height))
-        return drawn is not None and drawn[0] == self._scene_of(still) and (drawn[1] or not msaa)
+        size = (still.width, still.height)
+        drawn = self.scenes.get(size)
+        return size not in self.scenes_lost and drawn is not None and drawn[0] == self._scene_of(still) and (drawn[1] or not msaa)
 
     def _drew(self, still: StillParams, msaa: bool, hold_fog: bool = False) -> None:
         size, key = (still.width, still.height), self._scene_of(still)
@@ -437,6 +443,7 @@ class Session:
             reduced = self.refine_level > 0
             estimate_ms = self._estimate_ms(still, msaa=msaa, full=True)
         hold = not preview and self._holds_fog(still)
+        cached = self._scene_cached(still, not preview and msaa)
         self._drew(still, not preview and msaa, hold)
         self.frame += 1
         self.making += 1
@@ -448,7 +455,7 @@ class Session:
                         full=not preview, playing=self.playing, show=self.showing(), layer=v.layer,
                         scale=self.preview_scale if preview else 1.0,
                         rung=self.preview_rung if preview else 0,
-                        estimate_ms=estimate_ms, reduced=reduced, hold_fog=hold)
+                        estimate_ms=estimate_ms, reduced=reduced, hold_fog=hold, scene_cached=cached)
 
     def showing(self) -> str:
         """What the frames show: the view's choice, or the look while it asks for the
@@ -466,7 +473,8 @@ class Session:
         self.stalled = self.version
         self.dirty = False
 
-    def measured(self, job: FrameJob, render_ms: float, now: float, once: bool = False) -> None:
+    def measured(self, job: FrameJob, render_ms: float, now: float, once: bool = False,
+                 scene_reused: bool | None = None) -> None:
         """A frame's render time. Previews climb PREVIEW_RUNGS by what they cost: a
         preview over PREVIEW_BUDGET_MS makes the next one a rung lower; one well under
         it (a fifth to spare) a rung higher, unless that rung was measured over the
@@ -476,11 +484,26 @@ class Session:
         and one known not to pay is not taken. What frames measure against their estimates
         calibrates the estimates of the next new look (_recost) and of the refinement.
         A frame that did work once (`once`: compiled a program, baked a noise tile) is
-        neither a rung's cost nor a calibration."""
+        neither a rung's cost nor a calibration. `scene_reused`: whether the worker drew
+        over the scene pass it held (None: not known); one it let go (its cache held other
+        sessions' scene passes, render/targets.py) makes this session's frames at that size
+        estimated with their scene pass drawn until one finds it held again, and a frame
+        whose estimate took the other case calibrates nothing: several 1280x720 streams on
+        one worker, two of whose scene passes fit, had the others' full frames estimated at
+        25 ms, measured at 230 (the scene pass with MSAA), calibrated 9x over and kept with
+        MSAA; estimated with their scene pass they are drawn without MSAA (80 ms)."""
+        surprised = False
+        if scene_reused is not None:
+            size = (job.still.width, job.still.height)
+            if scene_reused:
+                self.scenes_lost.discard(size)
+            elif job.scene_cached:
+                self.scenes_lost.add(size)
+            surprised = scene_reused != job.scene_cached
         if once:   # it compiled a program or baked a noise tile: not what this look costs
             return
         self.last_ms = render_ms
-        if job.estimate_ms > 0:   # raw estimate: measured / estimated, smoothed
+        if job.estimate_ms > 0 and not surprised:   # raw estimate: measured / estimated, smoothed
             r = min(max(render_ms / job.estimate_ms, 0.05), 20.0)
             # the first measurement replaces the prior: smoothed with 1.0, a look the model
             # underestimates twice over was still underestimated by 1.4 on the next frame

@@ -185,10 +185,11 @@ def frame(still, slot: str, msaa: bool, quality: int, show: str = "shaded", laye
 
     def fn(r):
         t0 = time.perf_counter()
-        stats = None
+        stats, reused = None, None
         work = (r.programs.compiled, r.noise.baked)
         if show == "shaded":
             img = r.render(still, slot=slot, msaa=msaa, hold_fog=hold_fog)
+            reused = r.scene_reused
         else:
             img, stats = teach.render(r, still, show, layer, slot=slot)
         t1 = time.perf_counter()
@@ -196,7 +197,9 @@ def frame(still, slot: str, msaa: bool, quality: int, show: str = "shaded", laye
         return {"data": data, "render_ms": (t1 - t0) * 1000.0, "stats": stats,
                 "encode_ms": (time.perf_counter() - t1) * 1000.0,
                 # it compiled a program or baked a noise tile: work done once, not the look's cost
-                "once": (r.programs.compiled, r.noise.baked) != work}
+                "once": (r.programs.compiled, r.noise.baked) != work,
+                # whether it drew over the cached scene pass (None: a view that teaches)
+                "scene_reused": reused}
     return _run(fn)
 
 
