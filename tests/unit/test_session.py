@@ -242,7 +242,7 @@ def test_a_refinement_is_the_full_look_unless_its_estimate_is_over_the_budget():
 def test_a_look_near_the_play_budget_keeps_its_refinement_quality():
     """Hysteresis: a playing look whose calibrated estimate drifts to 1.1 times the budget
     keeps MSAA (it would flicker between qualities frame to frame); past 1.25 times it
-    drops it."""
+    drops it, and back under 0.8 times it takes it again."""
     from fogbank.stream.session import PLAY_BUDGET_MS
     from fogbank.workers.cost import estimate
     s = Session("a", now=0.0)
@@ -255,10 +255,14 @@ def test_a_look_near_the_play_budget_keeps_its_refinement_quality():
         s.making = 0
         s.start_frame(t)
     full = estimate(first.still, msaa=True, compiled=True, scene_cached=True, fog_held=True).seconds * 1000
-    for ratio, msaa in ((1.1, True), (1.3, False), (1.1, False), (0.7, True)):
+    for ratio, msaa in ((1.1, True), (1.3, False), (1.1, False)):
         s.cost_ratio = ratio * PLAY_BUDGET_MS / full
         s.making = 0
         assert s.start_frame(2.0).msaa == msaa
+    s.cost_ratio = 0.7 * PLAY_BUDGET_MS / full
+    s.level_ratios[0] = s.cost_ratio   # as its frames measured it: back to MSAA at once
+    s.making = 0
+    assert s.start_frame(2.0).msaa
 
 
 def test_work_a_worker_does_once_is_not_the_looks_cost():
@@ -470,3 +474,45 @@ def test_a_scene_pass_the_worker_let_go_is_estimated_drawn_and_calibrates_nothin
     assert not found.scene_cached and s.cost_ratio == ratio
     again = frame(1.4, 30.0, True)
     assert again.scene_cached
+
+
+def test_a_refinement_climbs_to_a_level_not_measured_only_from_a_level_that_was():
+    """Found measuring 16 layers of every kind at 960x540: the 240 px previews measured a
+    fifteenth of their estimate, that ratio made the full look with MSAA seem to fit, and
+    the first refinements took 700-930 ms (a slider's change waited for one). Calibrated
+    level by level, a level not measured is tried only next to one that was (a preview
+    measures its rung's level); a level next to one measured to fit is taken at once."""
+    s = Session("a", now=0.0)
+    s.apply(msg('{"type": "view", "width": 960, "height": 540}'), 0.0)
+    last = 2 + 6   # the last level: the last preview rung
+    s.refine_level, s.cost_ratio, s.calibrated = last, 0.02, True
+    s.level_ratios = {last: 0.02}
+    levels = []
+    for t in range(4):
+        job = s.start_frame(1.0 + t)
+        levels.append(job.level)
+        s.frame_done(job, sent=True)
+        s.apply(msg('{"type": "ack", "frame": %d}' % job.frame), 1.0 + t)
+        s.measured(job, 0.02 * job.estimate_ms, 1.0 + t)
+    assert levels == [last - 1, last - 2, last - 3, last - 4]
+    s.level_ratios[1] = 0.02   # without MSAA at full size, measured to fit: the full look is next to it
+    s.making = 0
+    assert s.start_frame(5.0).level == 0
+
+
+def test_a_new_sessions_previews_measure_the_levels_of_its_refinement():
+    """A new session previews a costly look (its rungs are levels 2..8 of the refinement),
+    and its first refinement is at most one level sharper than the sharpest measured."""
+    s = Session("a", now=0.0)
+    s.apply(msg('{"type": "view", "width": 960, "height": 540}'), 0.0)
+    s.preview_rung, s.costed = 4, (s.version, s.fog)   # as _recost left it
+    s.apply(msg('{"type": "interact", "active": true}'), 0.0)
+    job = s.start_frame(0.0)
+    assert not job.full and job.level == 2 + 4
+    s.frame_done(job, sent=True)
+    s.apply(msg('{"type": "ack", "frame": 1}'), 0.0)
+    s.measured(job, 0.1 * job.estimate_ms, 0.01)   # far cheaper than estimated
+    assert s.level_ratios == {6: 0.1}
+    s.apply(msg('{"type": "interact", "active": false}'), 0.01)
+    refine = s.start_frame(1.0)
+    assert refine.full and refine.level == 5
