@@ -516,3 +516,46 @@ def test_a_new_sessions_previews_measure_the_levels_of_its_refinement():
     s.apply(msg('{"type": "interact", "active": false}'), 0.01)
     refine = s.start_frame(1.0)
     assert refine.full and refine.level == 5
+
+
+def test_sessions_that_play_on_one_worker_share_the_play_budget():
+    """Each of `share` sessions drawing in turn on a worker holds its playing frames to
+    PLAY_BUDGET_MS / share (an input waits for the others' frames too): a look whose held
+    frames take 0.7 of the budget keeps MSAA alone, drops it when a second session plays
+    beside it, and takes it back alone."""
+    from fogbank.stream.session import PLAY_BUDGET_MS
+    from fogbank.workers.cost import estimate
+    s = Session("a", now=0.0)
+    s.apply(msg('{"type": "view", "width": 960, "height": 540}'), 0.0)
+    s.cost_ratio = 0.5
+    first = s.start_frame(1.0)
+    for t in (1.1, 1.2, 1.3):   # the worker holds the scene pass and the fog that does not move
+        s.making = 0
+        s.start_frame(t)
+    full = estimate(first.still, msaa=True, compiled=True, scene_cached=True, fog_held=True).seconds * 1000
+    s.cost_ratio = 0.7 * PLAY_BUDGET_MS / full
+    for share, msaa in ((1, True), (2, False), (1, True)):
+        s.making = 0
+        assert s.start_frame(2.0, share=share).msaa == msaa
+
+
+def test_a_calibrated_level_is_held_to_its_share_by_its_steady_frames_and_its_first_by_the_whole(monkeypatch):
+    """A size's first frame draws its scene pass and whole fog; the next ones reuse them
+    (the camera still). With a model where every level's steady frame takes 10 ms and its
+    first 40 ms, but the full look's first 8 s (16 layers of volume noise with MSAA), a
+    calibrated session of eight on a worker (25 ms each) climbs to the sharpest level
+    without MSAA, not to the full look; uncalibrated, it judges by the first frames, none
+    of which fits, and takes the last level."""
+    from types import SimpleNamespace
+    import fogbank.workers.cost as cost
+
+    def fake(still, msaa=True, scene_cached=False, fog_held=False, **_):
+        first = 8000.0 if msaa else 40.0
+        return SimpleNamespace(seconds=(10.0 if scene_cached and fog_held else first) / 1000)
+    monkeypatch.setattr(cost, "estimate", fake)
+    for calibrated, level in ((True, 1), (False, 2 + 6)):
+        s = Session("a", now=0.0)
+        s.apply(msg('{"type": "view", "width": 640, "height": 360}'), 0.0)
+        s.refine_level, s.cost_ratio, s.calibrated = 3, 1.0, calibrated
+        s.level_ratios = {3: 1.0, 2: 1.0}
+        assert s.start_frame(1.0, share=8).level == level

@@ -120,3 +120,18 @@ def test_playing_streams_on_one_worker_take_turns():
     others = [_client(st, sid) for sid in "bcd"]
     got = _serve(st, [a, *others], 40)
     assert got == {"a": 10, "b": 10, "c": 10, "d": 10}
+
+
+def test_a_frames_budget_is_shared_by_the_sessions_that_play_or_preview_on_its_worker():
+    """Streamer.sharing counts the sessions on the client's worker that draw frames in
+    turn (playing or previewing), the client included; not a paused one, nor one on
+    another worker."""
+    st, a = _streamer()
+    b, paused, dragging, elsewhere = (_client(st, sid) for sid in "bcde")
+    paused.session.apply(parse('{"type": "play", "playing": false}'), 0.0)
+    dragging.session.apply(parse('{"type": "play", "playing": false}'), 0.0)
+    dragging.session.apply(parse('{"type": "interact", "active": true}'), 0.0)
+    elsewhere.slot = SimpleNamespace(index=1)
+    assert st.sharing(a, 0.0) == 3      # a, b and the one dragging
+    assert st.sharing(elsewhere, 0.0) == 1
+    assert st.sharing(paused, 0.0) == 4

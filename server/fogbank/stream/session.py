@@ -70,7 +70,11 @@ REFINE_BUDGET_MS = 2000.0
 # camera still) is not in the estimate. A new session's first frames, not yet calibrated,
 # may be reduced: the default look at 960x540 is estimated at 362 ms with MSAA (measured
 # 166), so its first frame is 720 px wide (at 0.1 s), and the next, calibrated, the full
-# look (at 0.3-0.4 s; at 1280x720 alike).
+# look (at 0.3-0.4 s; at 1280x720 alike). Sessions that play or preview on one worker
+# share it: their frames are drawn in turn, so an input waits for theirs too, and each
+# session's frames are held to this over their number (Streamer.sharing). Four 1280x720
+# streams on one worker, two of whose scene passes its cache holds: the other two drew
+# theirs with MSAA, 230 ms a frame, and each stream got 2.2 frames a second (7.7 shared).
 PLAY_BUDGET_MS = 200.0
 # While time runs over a still camera, a full frame asks its worker to hold the fog's
 # time-invariant part with the scene pass (render/passes/fog.py), unless some layers move
@@ -377,7 +381,8 @@ class Session:
             while len(self.scenes) > 2 * len(PREVIEW_RUNGS):
                 self.scenes.pop(next(iter(self.scenes)))
 
-    def _estimate_ms(self, still: StillParams, msaa: bool = False, held: bool = True, full: bool = False) -> float:
+    def _estimate_ms(self, still: StillParams, msaa: bool = False, held: bool = True, full: bool = False,
+                     steady: bool = False) -> float:
         """The cost model's render time of a frame (workers/cost.py), uncalibrated, without
         what a worker does once (compiling a fog program, baking a noise tile): those are
         not this look's cost per frame; nor the scene pass while the worker holds it (a
@@ -385,8 +390,14 @@ class Session:
         at 720p is a third of one with its scene drawn), nor, while time runs over a still
         camera, the fog the worker holds for a `full` frame (_fog_held); `held` False: the
         look's own cost, the scene and the whole fog drawn (two looks compared are compared
-        alike)."""
+        alike). `steady`: a full frame once the worker holds what it would (the camera
+        still): the scene pass, unless the worker let it go at this size, and the fog the
+        frame asks it to hold."""
         from fogbank.workers.cost import estimate
+        if steady:
+            scene = (still.width, still.height) not in self.scenes_lost
+            return estimate(still, msaa=msaa, compiled=True, baked=True, scene_cached=scene,
+                            fog_held=scene and self._holds_fog(still)).seconds * 1000.0
         return estimate(still, msaa=msaa, compiled=True, baked=True,
                         scene_cached=held and self._scene_cached(still, msaa),
                         fog_held=held and full and self._fog_held(still, msaa)).seconds * 1000.0
@@ -411,7 +422,7 @@ class Session:
                 len(PREVIEW_RUNGS) - 1)
         self.costed = (self.version, fog)
 
-    def _refinement(self, fog: FogParams, now: float) -> tuple[StillParams, bool]:
+    def _refinement(self, fog: FogParams, now: float, share: int = 1) -> tuple[StillParams, bool]:
         """The frame after input stops, and whether with MSAA: the full look, unless its
         calibrated estimate is over REFINE_BUDGET_MS (PLAY_BUDGET_MS while time runs; see
         there); then the first of (no MSAA, the preview rungs) that fits. With hysteresis: a
@@ -428,26 +439,42 @@ class Session:
         v = self.view
         still = StillParams.model_construct(**{**dict(fog), "time": self.sim_time(now),
                                                "width": v.width, "height": v.height})
-        budget = PLAY_BUDGET_MS if self.playing else REFINE_BUDGET_MS
+        whole = PLAY_BUDGET_MS if self.playing else REFINE_BUDGET_MS
+        budget = whole / max(1, share) if self.playing else whole
         n = 2 + len(PREVIEW_RUNGS)
 
         def level(i: int) -> tuple[StillParams, bool]:   # built only when asked (every full frame)
             return (still, i == 0) if i < 2 else (self._preview_still(fog, i - 2, now), False)
 
-        def cost(i: int) -> float:
+        def cost(i: int, steady: bool) -> float:
             ratio = next((self.level_ratios[j] for j in range(i, n) if j in self.level_ratios), self.cost_ratio)
-            return ratio * self._estimate_ms(*level(i), full=True)
+            return ratio * self._estimate_ms(*level(i), full=True, steady=steady)
+
         def known(i: int) -> bool:   # measured, or next to a level that was
             return not self.level_ratios or i in self.level_ratios or i + 1 in self.level_ratios
-        want = next((i for i in range(n) if known(i) and cost(i) <= budget), n - 1)
+
+        # Once calibrated, a level is held to the budget by the cost of its frames once the
+        # worker holds what it would (steady): the first frames at a new size draw its scene
+        # pass and the whole fog, paid once (8 streams of 640x360 on a worker, each held to
+        # an eighth of the budget, never went back above 160 px: a size's first frame looked
+        # too costly). That first frame is held to the whole budget: the first frames of 16
+        # layers of volume noise at 960x540 with MSAA take 8 s, its steady ones 13 ms.
+        steady = self.calibrated
+
+        def fits(i: int, share_of_budget: float) -> bool:
+            return (known(i) and cost(i, steady) <= share_of_budget * budget
+                    and (not steady or cost(i, False) <= whole))
+        want = next((i for i in range(n) if fits(i, 1.0)), n - 1)
         keep = min(self.refine_level, n - 1)
-        if (want > keep and known(keep) and cost(keep) <= 1.25 * budget) or \
-                (want < keep and cost(want) > 0.8 * budget):
+        if (want > keep and known(keep) and cost(keep, steady) <= 1.25 * budget) or \
+                (want < keep and not fits(want, 0.8)):
             want = keep
         self.refine_level = want
         return level(want)
 
-    def start_frame(self, now: float) -> FrameJob:
+    def start_frame(self, now: float, share: int = 1) -> FrameJob:
+        """The next frame; `share`: how many sessions play or preview on this session's
+        worker, this one included (their frames are drawn in turn: PLAY_BUDGET_MS)."""
         preview = self.previewing(now)
         v = self.view
         fog = self.fog
@@ -458,7 +485,7 @@ class Session:
             still = self._preview_still(fog, self.preview_rung, now)
             estimate_ms = self._estimate_ms(still)
         else:
-            still, msaa = self._refinement(fog, now)
+            still, msaa = self._refinement(fog, now, share)
             reduced = self.refine_level > 0
             estimate_ms = self._estimate_ms(still, msaa=msaa, full=True)
         hold = not preview and self._holds_fog(still)

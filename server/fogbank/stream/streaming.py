@@ -142,6 +142,12 @@ class Streamer:
             return room
         return room + 1
 
+    def sharing(self, client: Client, now: float) -> int:
+        """How many sessions on `client`'s worker play or preview (draw frames in turn),
+        `client`'s included."""
+        return 1 + sum(1 for c in self.clients.values() if c is not client and c.slot is client.slot
+                       and (c.session.playing or c.session.previewing(now)))
+
     def _pick(self, now: float) -> tuple[Client | None, float | None]:
         """The next due client whose worker has room, in round-robin order, else when the
         earliest one is due. A worker's queued frame (queue_room's one more) goes only to a
@@ -180,7 +186,7 @@ class Streamer:
             now = self.clock()
             client, soonest = self._pick(now)
             if client is not None:
-                job = client.session.start_frame(now)
+                job = client.session.start_frame(now, self.sharing(client, now))
                 self.frames[client.slot.index] = self.frames.get(client.slot.index, 0) + 1
                 asyncio.get_running_loop().create_task(self._produce(client, job))
                 continue
