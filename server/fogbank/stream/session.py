@@ -458,15 +458,22 @@ class Session:
         # pass and the whole fog, paid once (8 streams of 640x360 on a worker, each held to
         # an eighth of the budget, never went back above 160 px: a size's first frame looked
         # too costly). That first frame is held to the whole budget: the first frames of 16
-        # layers of volume noise at 960x540 with MSAA take 8 s, its steady ones 13 ms.
+        # layers of volume noise at 960x540 with MSAA take 8 s, its steady ones 13 ms; and a
+        # level is kept only while its next frame is too (a held fog's first two frames
+        # draw the whole fog: 16 layers of volume noise 240 px wide, 3 ms a frame once held,
+        # took 420 ms for each of those, and a slider's change waited for the second).
         steady = self.calibrated
 
         def fits(i: int, share_of_budget: float) -> bool:
-            return (known(i) and cost(i, steady) <= share_of_budget * budget
+            return (cost(i, steady) <= share_of_budget * budget
                     and (not steady or cost(i, False) <= whole))
-        want = next((i for i in range(n) if fits(i, 1.0)), n - 1)
         keep = min(self.refine_level, n - 1)
-        if (want > keep and known(keep) and cost(keep, steady) <= 1.25 * budget) or \
+        # from a measured level, a cheaper one is taken at once; any other only next to a
+        # measured one (a new session's level 0 is not measured)
+        at = keep if keep in self.level_ratios else n
+        want = next((i for i in range(n) if (i > at or known(i)) and fits(i, 1.0)), n - 1)
+        if (want > keep and known(keep) and cost(keep, steady) <= 1.25 * budget
+                and (not steady or cost(keep, False) <= whole)) or \
                 (want < keep and not fits(want, 0.8)):
             want = keep
         self.refine_level = want
