@@ -128,3 +128,32 @@ def test_a_session_whose_camera_moves_leaves_its_place_to_one_that_reuses_it(ren
     hits = _cached_frames(r, ["a", "b", "c"], 5, now, orbiting={"a"})
     assert hits == {"a": 0, "b": 4, "c": 3}   # 'c' finds its pass from its third frame
     r.release_caches()
+
+
+def test_the_scratch_targets_of_a_size_no_longer_drawn_go_before_scene_passes_in_use(renderer):
+    """Found in the benchmark: after eight 640x360 streams ended, two 1280x720 streams lost a
+    scene pass every fourth frame to the 640x360 scratch targets (12 frames a second
+    together, 31-34 on a fresh worker). Six sessions whose scene passes fit only without an
+    idle size's scratch targets: with them gone, every frame after each session's first
+    finds its scene pass."""
+    from fogbank.render.renderer import Renderer
+    from fogbank.render.targets import ACTIVE_S
+    small = StillParams.model_validate({**preset_dict("default"), "width": 64, "height": 64})
+    probe = Renderer(renderer.ctx, cache_bytes=1 << 30)
+    _cached_frames(probe, ["probe"], 1, [0.0])
+    t = probe.caches.targets(160, 90).nbytes()
+    g = probe.caches.nbytes() - t
+    probe.render(small, slot="probe")
+    t_small = probe.caches.targets(64, 64).nbytes()
+    probe.release_caches()
+    budget = int(t + t_small / 2 + 6 * g)
+    assert t + t_small <= budget // 2   # both sizes' scratch targets fit their half
+    now = [0.0]
+    r = Renderer(renderer.ctx, cache_bytes=budget, clock=lambda: now[0])
+    r.render(small, slot="gone")
+    r.drop_slot("gone")
+    now[0] += ACTIVE_S + 0.1
+    slots = [f"s{i}" for i in range(6)]
+    hits = _cached_frames(r, slots, 4, now)
+    assert hits == {s: 3 for s in slots}
+    r.release_caches()
