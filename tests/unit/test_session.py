@@ -543,19 +543,22 @@ def test_a_calibrated_level_is_held_to_its_share_by_its_steady_frames_and_its_fi
     """A size's first frame draws its scene pass and whole fog; the next ones reuse them
     (the camera still). With a model where every level's steady frame takes 10 ms and its
     first 40 ms, but the full look's first 8 s (16 layers of volume noise with MSAA), a
-    calibrated session of eight on a worker (25 ms each) climbs to the sharpest level
-    without MSAA, not to the full look; uncalibrated, it judges by the first frames, none
-    of which fits, and takes the last level."""
+    calibrated session of eight on a worker (25 ms each) just after input climbs to the
+    sharpest level without MSAA, not to the full look; after QUIET_S without input, to the
+    full look; uncalibrated, it judges by the first frames, none of which fits, and takes
+    the last level."""
     from types import SimpleNamespace
     import fogbank.workers.cost as cost
+    from fogbank.stream.session import QUIET_S
 
     def fake(still, msaa=True, scene_cached=False, fog_held=False, **_):
         first = 8000.0 if msaa else 40.0
         return SimpleNamespace(seconds=(10.0 if scene_cached and fog_held else first) / 1000)
     monkeypatch.setattr(cost, "estimate", fake)
-    for calibrated, level in ((True, 1), (False, 2 + 6)):
+    for calibrated, at, level in ((True, 1.0, 1), (True, 0.7 + QUIET_S, 0), (False, 1.0, 2 + 6)):
         s = Session("a", now=0.0)
         s.apply(msg('{"type": "view", "width": 640, "height": 360}'), 0.0)
-        s.refine_level, s.cost_ratio, s.calibrated = 3, 1.0, calibrated
-        s.level_ratios = {3: 1.0, 2: 1.0}
-        assert s.start_frame(1.0, share=8).level == level
+        s.apply(msg('{"type": "params", "params": {"density": 1.1}}'), 0.7)
+        s.refine_level, s.cost_ratio, s.calibrated = 2, 1.0, calibrated
+        s.level_ratios = {1: 1.0, 2: 1.0} if calibrated else {}
+        assert s.start_frame(at, share=8).level == level

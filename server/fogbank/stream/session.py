@@ -85,6 +85,11 @@ PLAY_BUDGET_MS = 200.0
 # its fog target itself and compiles nothing. Previews never ask: a look dragged changes
 # at every few frames.
 HOLD_COMPILE_S = 0.6
+# A refinement level whose first frames (its scene pass and whole fog drawn) would take
+# over the play budget is taken only after this long without input: a user who watches,
+# not one who is about to drag (_refinement). 1920x1080's first frame with MSAA takes about
+# 500 ms, its next ones 65.
+QUIET_S = 2.0
 
 
 def _detailed(layer, detail: float):
@@ -461,19 +466,22 @@ class Session:
         # layers of volume noise at 960x540 with MSAA take 8 s, its steady ones 13 ms; and a
         # level is kept only while its next frame is too (a held fog's first two frames
         # draw the whole fog: 16 layers of volume noise 240 px wide, 3 ms a frame once held,
-        # took 420 ms for each of those, and a slider's change waited for the second).
+        # took 420 ms for each of those, and a slider's change waited for the second). After
+        # QUIET_S without input, the first frames may take longer: 1920x1080 streams were
+        # never drawn with MSAA (its first frame takes 500 ms, the next 65).
         steady = self.calibrated
+        quiet = now - self.last_input >= QUIET_S
 
         def fits(i: int, share_of_budget: float) -> bool:
             return (cost(i, steady) <= share_of_budget * budget
-                    and (not steady or cost(i, False) <= whole))
+                    and (not steady or quiet or cost(i, False) <= whole))
         keep = min(self.refine_level, n - 1)
         # from a measured level, a cheaper one is taken at once; any other only next to a
         # measured one (a new session's level 0 is not measured)
         at = keep if keep in self.level_ratios else n
         want = next((i for i in range(n) if (i > at or known(i)) and fits(i, 1.0)), n - 1)
         if (want > keep and known(keep) and cost(keep, steady) <= 1.25 * budget
-                and (not steady or cost(keep, False) <= whole)) or \
+                and (not steady or quiet or cost(keep, False) <= whole)) or \
                 (want < keep and not fits(want, 0.8)):
             want = keep
         self.refine_level = want
