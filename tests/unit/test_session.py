@@ -260,7 +260,7 @@ def test_a_look_near_the_play_budget_keeps_its_refinement_quality():
         s.making = 0
         assert s.start_frame(2.0).msaa == msaa
     s.cost_ratio = 0.7 * PLAY_BUDGET_MS / full
-    s.level_ratios[0] = s.cost_ratio   # as its frames measured it: back to MSAA at once
+    s.level_ratios[0] = (s.cost_ratio, 2.0)   # as its frames measured it (ratio, when)
     s.making = 0
     assert s.start_frame(2.0).msaa
 
@@ -486,7 +486,7 @@ def test_a_refinement_climbs_to_a_level_not_measured_only_from_a_level_that_was(
     s.apply(msg('{"type": "view", "width": 960, "height": 540}'), 0.0)
     last = 2 + 6   # the last level: the last preview rung
     s.refine_level, s.cost_ratio, s.calibrated = last, 0.02, True
-    s.level_ratios = {last: 0.02}
+    s.level_ratios = {last: (0.02, 1.0)}
     levels = []
     for t in range(4):
         job = s.start_frame(1.0 + t)
@@ -495,7 +495,7 @@ def test_a_refinement_climbs_to_a_level_not_measured_only_from_a_level_that_was(
         s.apply(msg('{"type": "ack", "frame": %d}' % job.frame), 1.0 + t)
         s.measured(job, 0.02 * job.estimate_ms, 1.0 + t)
     assert levels == [last - 1, last - 2, last - 3, last - 4]
-    s.level_ratios[1] = 0.02   # without MSAA at full size, measured to fit: the full look is next to it
+    s.level_ratios[1] = (0.02, 5.0)   # without MSAA at full size, measured to fit: the full look is next to it
     s.making = 0
     assert s.start_frame(5.0).level == 0
 
@@ -512,7 +512,7 @@ def test_a_new_sessions_previews_measure_the_levels_of_its_refinement():
     s.frame_done(job, sent=True)
     s.apply(msg('{"type": "ack", "frame": 1}'), 0.0)
     s.measured(job, 0.1 * job.estimate_ms, 0.01)   # far cheaper than estimated
-    assert s.level_ratios == {6: 0.1}
+    assert s.level_ratios == {6: (0.1, 0.01)}
     s.apply(msg('{"type": "interact", "active": false}'), 0.01)
     refine = s.start_frame(1.0)
     assert refine.full and refine.level == 5
@@ -560,5 +560,25 @@ def test_a_calibrated_level_is_held_to_its_share_by_its_steady_frames_and_its_fi
         s.apply(msg('{"type": "view", "width": 640, "height": 360}'), 0.0)
         s.apply(msg('{"type": "params", "params": {"density": 1.1}}'), 0.7)
         s.refine_level, s.cost_ratio, s.calibrated = 2, 1.0, calibrated
-        s.level_ratios = {1: 1.0, 2: 1.0} if calibrated else {}
+        s.level_ratios = {1: (1.0, 0.0), 2: (1.0, 0.0)} if calibrated else {}
         assert s.start_frame(at, share=8).level == level
+
+def test_a_level_measured_costly_is_tried_again_after_its_ratio_expires():
+    """Found by review: a level measured costly is not drawn again, so not measured again,
+    and sharper levels borrow its ratio; after RATIO_TTL_S its ratio no longer counts. And
+    a scene pass the worker let go counts as lost for LOST_S only."""
+    from fogbank.stream.session import LOST_S, RATIO_TTL_S
+    s = Session("a", now=0.0)
+    s.apply(msg('{"type": "view", "width": 960, "height": 540}'), 0.0)
+    s.refine_level, s.cost_ratio, s.calibrated = 3, 0.5, True
+    s.level_ratios = {2: (50.0, 1.0), 3: (0.5, 1.0)}   # level 2 once measured far over its estimate
+    s.making = 0
+    assert s.start_frame(2.0).level == 3
+    s.level_ratios[3] = (0.5, 2.0 + RATIO_TTL_S)        # still drawn and measured
+    s.making = 0
+    assert s.start_frame(2.0 + RATIO_TTL_S).level == 2   # level 2's ratio expired: tried again
+    s.scenes_lost[(960, 540)] = 20.0
+    s.now = 20.0 + LOST_S / 2
+    assert s._lost((960, 540))
+    s.now = 20.0 + LOST_S
+    assert not s._lost((960, 540))

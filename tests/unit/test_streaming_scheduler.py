@@ -124,14 +124,18 @@ def test_playing_streams_on_one_worker_take_turns():
 
 def test_a_frames_budget_is_shared_by_the_sessions_that_play_or_preview_on_its_worker():
     """Streamer.sharing counts the sessions on the client's worker that draw frames in
-    turn (playing or previewing), the client included; not a paused one, nor one on
-    another worker."""
+    turn (previewing, or playing with a frame started within SHARE_RECENT_S), the client
+    included; not a paused one, nor one on another worker, nor a playing one whose client
+    took no frame lately (found by review: it cut the others' budgets for nothing)."""
+    from fogbank.stream.streaming import SHARE_RECENT_S
     st, a = _streamer()
-    b, paused, dragging, elsewhere = (_client(st, sid) for sid in "bcde")
+    b, paused, dragging, elsewhere, stalled = (_client(st, sid) for sid in "bcdef")
+    b.session.last_start = 0.0 - SHARE_RECENT_S / 2
+    stalled.session.last_start = 0.0 - 2 * SHARE_RECENT_S
     paused.session.apply(parse('{"type": "play", "playing": false}'), 0.0)
     dragging.session.apply(parse('{"type": "play", "playing": false}'), 0.0)
     dragging.session.apply(parse('{"type": "interact", "active": true}'), 0.0)
     elsewhere.slot = SimpleNamespace(index=1)
     assert st.sharing(a, 0.0) == 3      # a, b and the one dragging
     assert st.sharing(elsewhere, 0.0) == 1
-    assert st.sharing(paused, 0.0) == 4
+    assert st.sharing(paused, 0.0) == 3   # itself, b and the one dragging: not a, which started no frame

@@ -90,6 +90,13 @@ HOLD_COMPILE_S = 0.6
 # not one who is about to drag (_refinement). 1920x1080's first frame with MSAA takes about
 # 500 ms, its next ones 65.
 QUIET_S = 2.0
+# A refinement level's measured ratio (Session.level_ratios) is trusted this long: a level
+# measured costly is not drawn, so not measured again, and the sharper levels borrow its
+# ratio; after this the session tries them again.
+RATIO_TTL_S = 10.0
+# A scene pass the worker let go (Session.scenes_lost) is taken as lost this long: the
+# session may have left the sizes it could redraw it at, and the other sessions the worker.
+LOST_S = 5.0
 
 
 def _detailed(layer, detail: float):
@@ -152,7 +159,8 @@ class Session:
         self.refine_level = 0     # the refinement's last quality (Session._refinement)
         # measured / estimated of the full frames at each refinement level, smoothed: the cost
         # model's error differs by size (a look's fixed costs against its pixels)
-        self.level_ratios: dict[int, float] = {}
+        self.level_ratios: dict[int, tuple[float, float]] = {}   # level -> (ratio, when)
+        self.now = 0.0   # the latest start_frame's time
         self.costed: tuple[int, FogParams | None] = (-1, None)   # the look last costed, and its version
         # the scene pass this session's worker holds at each frame size: (scene, camera, sun,
         # sunlight target) and whether with MSAA (render/targets.py keeps one per slot and size)
@@ -160,7 +168,7 @@ class Session:
         # the sizes whose scene pass the worker let go although this session drew it last
         # (its cache outgrew its budget, render/targets.py): until a frame finds it held
         # again, frames are estimated with their scene pass drawn (measured)
-        self.scenes_lost: set[tuple[int, int]] = set()
+        self.scenes_lost: dict[tuple[int, int], float] = {}   # size -> when
         # at each size, the held-fog key of the last frame (_held_fog_of; render/passes/fog.py)
         # and how many frames in a row asked for it over a held scene pass
         self.fogs: dict[tuple[int, int], tuple[tuple, int]] = {}
@@ -210,6 +218,7 @@ class Session:
                 except URLError as exc:
                     return [{"type": "error", "detail": exc.errors, "msg": str(exc)}]
                 self._set_fog(fog, now, input_=False)
+                self.level_ratios.clear()   # another look: its costs are its own
                 view = view_state(msg.query.lstrip("?"))
                 self.playing = view.get("playing", True)
                 self.speed = view.get("speed", 1.0)
@@ -254,6 +263,7 @@ class Session:
         if isinstance(msg, ViewMsg):
             if (msg.width, msg.height) != (self.view.width, self.view.height):
                 self.level_ratios.clear()   # the levels are other sizes now
+                self.scenes_lost.clear()
             self.view = msg
             self.view_known = True
             self.dirty = True
@@ -365,12 +375,15 @@ class Session:
         return (frames >= 2 and self._scene_cached(still, msaa) and key == self._held_fog_of(still)
                 and self._holds_fog(still))
 
+    def _lost(self, size: tuple[int, int]) -> bool:
+        return self.now - self.scenes_lost.get(size, -math.inf) < LOST_S
+
     def _scene_cached(self, still: StillParams, msaa: bool) -> bool:
         """Whether the worker holds this frame's scene pass: the last frame at its size drew
         the same scene, camera and sun (a frame without MSAA reuses one with it)."""
         size = (still.width, still.height)
         drawn = self.scenes.get(size)
-        return size not in self.scenes_lost and drawn is not None and drawn[0] == self._scene_of(still) and (drawn[1] or not msaa)
+        return not self._lost(size) and drawn is not None and drawn[0] == self._scene_of(still) and (drawn[1] or not msaa)
 
     def _drew(self, still: StillParams, msaa: bool, hold_fog: bool = False) -> None:
         size, key = (still.width, still.height), self._scene_of(still)
@@ -400,7 +413,7 @@ class Session:
         frame asks it to hold."""
         from fogbank.workers.cost import estimate
         if steady:
-            scene = (still.width, still.height) not in self.scenes_lost
+            scene = not self._lost((still.width, still.height))
             return estimate(still, msaa=msaa, compiled=True, baked=True, scene_cached=scene,
                             fog_held=scene and self._holds_fog(still)).seconds * 1000.0
         return estimate(still, msaa=msaa, compiled=True, baked=True,
@@ -451,12 +464,14 @@ class Session:
         def level(i: int) -> tuple[StillParams, bool]:   # built only when asked (every full frame)
             return (still, i == 0) if i < 2 else (self._preview_still(fog, i - 2, now), False)
 
+        lr = {k: r for k, (r, t) in self.level_ratios.items() if now - t <= RATIO_TTL_S}
+
         def cost(i: int, steady: bool) -> float:
-            ratio = next((self.level_ratios[j] for j in range(i, n) if j in self.level_ratios), self.cost_ratio)
+            ratio = next((lr[j] for j in range(i, n) if j in lr), self.cost_ratio)
             return ratio * self._estimate_ms(*level(i), full=True, steady=steady)
 
-        def known(i: int) -> bool:   # measured, or next to a level that was
-            return not self.level_ratios or i in self.level_ratios or i + 1 in self.level_ratios
+        def known(i: int) -> bool:   # measured, next to a level that was, or cheaper than all
+            return not lr or i in lr or i + 1 in lr or i > min(lr)
 
         # Once calibrated, a level is held to the budget by the cost of its frames once the
         # worker holds what it would (steady): the first frames at a new size draw its scene
@@ -469,7 +484,7 @@ class Session:
         # took 420 ms for each of those, and a slider's change waited for the second). After
         # QUIET_S without input, the first frames may take longer: 1920x1080 streams were
         # never drawn with MSAA (its first frame takes 500 ms, the next 65).
-        steady = self.calibrated
+        steady = self.calibrated and bool(lr)
         quiet = now - self.last_input >= QUIET_S
 
         def fits(i: int, share_of_budget: float) -> bool:
@@ -478,7 +493,7 @@ class Session:
         keep = min(self.refine_level, n - 1)
         # from a measured level, a cheaper one is taken at once; any other only next to a
         # measured one (a new session's level 0 is not measured)
-        at = keep if keep in self.level_ratios else n
+        at = keep if keep in lr else n
         want = next((i for i in range(n) if (i > at or known(i)) and fits(i, 1.0)), n - 1)
         if (want > keep and known(keep) and cost(keep, steady) <= 1.25 * budget
                 and (not steady or quiet or cost(keep, False) <= whole)) or \
@@ -490,6 +505,7 @@ class Session:
     def start_frame(self, now: float, share: int = 1) -> FrameJob:
         """The next frame; `share`: how many sessions play or preview on this session's
         worker, this one included (their frames are drawn in turn: PLAY_BUDGET_MS)."""
+        self.now = now
         preview = self.previewing(now)
         v = self.view
         fog = self.fog
@@ -558,9 +574,9 @@ class Session:
         if scene_reused is not None:
             size = (job.still.width, job.still.height)
             if scene_reused:
-                self.scenes_lost.discard(size)
+                self.scenes_lost.pop(size, None)
             elif job.scene_cached:
-                self.scenes_lost.add(size)
+                self.scenes_lost[size] = now
             surprised = scene_reused != job.scene_cached
         if once:   # it compiled a program or baked a noise tile: not what this look costs
             return
@@ -575,7 +591,8 @@ class Session:
             self.calibrated = True
             if job.show == "shaded":   # a view that teaches costs otherwise
                 old = self.level_ratios.get(job.level)
-                self.level_ratios[job.level] = r if old is None else math.sqrt(old * r)
+                fresh = old is not None and now - old[1] <= RATIO_TTL_S
+                self.level_ratios[job.level] = (math.sqrt(old[0] * r) if fresh else r, now)
         if job.full:
             return
         prev = self.preview_costs.get(job.rung)

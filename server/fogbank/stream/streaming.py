@@ -42,6 +42,7 @@ log = logging.getLogger("fogbank.stream")
 
 
 IDLE_CLOSE = 4408
+SHARE_RECENT_S = 1.0   # a playing session that started a frame this recently shares its worker (Streamer.sharing)
 QUEUE_MAX_MS = 60.0   # a frame costlier than this is never queued behind another (Streamer.queue_room)   # closed for inactivity (no messages, or frames left unacknowledged)
 
 
@@ -143,10 +144,12 @@ class Streamer:
         return room + 1
 
     def sharing(self, client: Client, now: float) -> int:
-        """How many sessions on `client`'s worker play or preview (draw frames in turn),
-        `client`'s included."""
+        """How many sessions on `client`'s worker draw frames in turn (preview, or play
+        and started a frame within the last second: a playing session whose client does
+        not acknowledge its frames draws none), `client`'s included."""
         return 1 + sum(1 for c in self.clients.values() if c is not client and c.slot is client.slot
-                       and (c.session.playing or c.session.previewing(now)))
+                       and (c.session.previewing(now)
+                            or (c.session.playing and now - c.session.last_start < SHARE_RECENT_S)))
 
     def _pick(self, now: float) -> tuple[Client | None, float | None]:
         """The next due client whose worker has room, in round-robin order, else when the
