@@ -376,6 +376,8 @@ class Session:
                 and self._holds_fog(still))
 
     def _lost(self, size: tuple[int, int]) -> bool:
+        """Whether the worker let this size's scene pass go within LOST_S of the frame
+        being started (self.now)."""
         return self.now - self.scenes_lost.get(size, -math.inf) < LOST_S
 
     def _scene_cached(self, still: StillParams, msaa: bool) -> bool:
@@ -383,7 +385,8 @@ class Session:
         the same scene, camera and sun (a frame without MSAA reuses one with it)."""
         size = (still.width, still.height)
         drawn = self.scenes.get(size)
-        return not self._lost(size) and drawn is not None and drawn[0] == self._scene_of(still) and (drawn[1] or not msaa)
+        return (not self._lost(size) and drawn is not None and drawn[0] == self._scene_of(still)
+                and (drawn[1] or not msaa))
 
     def _drew(self, still: StillParams, msaa: bool, hold_fog: bool = False) -> None:
         size, key = (still.width, still.height), self._scene_of(still)
@@ -449,8 +452,8 @@ class Session:
         and to a level not measured only next to one that was (a preview measures its
         rung's level). Each level's estimate is calibrated by what its own frames (and
         previews) measured against theirs, else by the nearest cheaper level's that were
-        measured, else by the session's: 16 layers of every kind were estimated at 497 ms 240 px wide
-        and at 865 ms 960 px wide, measured at 7-20 and 230-250; calibrated by one ratio
+        measured, else by the session's: 16 layers of every kind were estimated at 497 ms
+        240 px wide and at 865 ms 960 px wide, measured at 7-20 and 230-250; calibrated by one ratio
         (0.06 after 240 px previews), a new session's first refinements were 960 px wide
         with MSAA, 700-930 ms each, and then went back and forth between 336 and 960 px; a
         slider's change waited for such a frame (p95 580-650 ms)."""
@@ -495,9 +498,7 @@ class Session:
         # measured one (a new session's level 0 is not measured)
         at = keep if keep in lr else n
         want = next((i for i in range(n) if (i > at or known(i)) and fits(i, 1.0)), n - 1)
-        if (want > keep and known(keep) and cost(keep, steady) <= 1.25 * budget
-                and (not steady or quiet or cost(keep, False) <= whole)) or \
-                (want < keep and not fits(want, 0.8)):
+        if (want > keep and known(keep) and fits(keep, 1.25)) or (want < keep and not fits(want, 0.8)):
             want = keep
         self.refine_level = want
         return level(want)

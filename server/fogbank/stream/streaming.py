@@ -41,9 +41,9 @@ from fogbank.workers.supervisor import DeadlineExceeded, Slot, Supervisor, Worke
 log = logging.getLogger("fogbank.stream")
 
 
-IDLE_CLOSE = 4408
+IDLE_CLOSE = 4408   # closed for inactivity (no messages, or frames left unacknowledged)
 SHARE_RECENT_S = 1.0   # a playing session that started a frame this recently shares its worker (Streamer.sharing)
-QUEUE_MAX_MS = 60.0   # a frame costlier than this is never queued behind another (Streamer.queue_room)   # closed for inactivity (no messages, or frames left unacknowledged)
+QUEUE_MAX_MS = 60.0   # a frame costlier than this is never queued behind another (Streamer.queue_room)
 
 
 class Client:
@@ -145,8 +145,8 @@ class Streamer:
 
     def sharing(self, client: Client, now: float) -> int:
         """How many sessions on `client`'s worker draw frames in turn (preview, or play
-        and started a frame within the last second: a playing session whose client does
-        not acknowledge its frames draws none), `client`'s included."""
+        and started a frame within SHARE_RECENT_S: a playing session whose client does not
+        acknowledge its frames draws none), `client`'s included."""
         return 1 + sum(1 for c in self.clients.values() if c is not client and c.slot is client.slot
                        and (c.session.previewing(now)
                             or (c.session.playing and now - c.session.last_start < SHARE_RECENT_S)))
