@@ -3,11 +3,13 @@ closed forms (so its step counts are honest), and the report is written from res
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
 
 from fogbank.render.probes import fog_only
-from fogbank.tools.bench import _kind_looks, _reference, markdown
+from fogbank.tools.bench import _kind_looks, _reference, _tree_env, markdown
 
 
 @pytest.mark.parametrize("kind", ["homogeneous", "height", "cosine", "polynomial", "potential", "sphere"])
@@ -103,5 +105,13 @@ def test_the_targets_table_reads_each_figure_and_judges_it_against_its_target():
     assert "| VTK's unfogged 720p frame / fogbank's foggy one (no MSAA) | 1.20x | 3.50x | >= 3x | yes |" in md
     assert "| 16 layers, 960x540: control-to-frame p95, worst look | 900.0 ms | 240.0 ms | <= 250 ms | yes |" in md
     assert "| analytic / raymarch of equal accuracy, potential | 9.00x | 9.00x | >= 10x | no |" in md
-    assert "| 2 render workers / 1, aggregate fps (2 cores) | 1.25x | 1.25x | - | - |" in md
+    assert "| 2 render workers / 1, aggregate fps | 1.25x | 1.25x | - | - |" in md
     assert "| 16 x sphere | 50 | 240 | 240 | 480 | 30 | 900 |" in md
+
+
+def test_the_earlier_trees_server_has_its_folder_first_and_keeps_the_paths_already_set(monkeypatch, tmp_path):
+    monkeypatch.setenv("PYTHONPATH", os.pathsep.join(["/opt/site", "", "/opt/more"]))
+    env = _tree_env(str(tmp_path / "old" / "server"))
+    assert env == {"PYTHONPATH": os.pathsep.join([str(tmp_path / "old" / "server"), "/opt/site", "/opt/more"])}
+    monkeypatch.delenv("PYTHONPATH")
+    assert _tree_env(str(tmp_path)) == {"PYTHONPATH": str(tmp_path)}
