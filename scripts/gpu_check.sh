@@ -2,19 +2,27 @@
 # fogbank's GPU checks in one call, on a bare GPU machine that has no network and no
 # fogbank dependencies (how docs/bench-gpu.md was made). Run from the repo root, with:
 #   .gl/    Debian's GL loader packages (libegl1 libglvnd0 libopengl0 libgl1 libglx0
-#           libgles2 libvulkan1), unpacked into / here: run it on a throwaway machine only;
+#           libgles2 libvulkan1), unpacked into / here: it refuses to run unless
+#           FOGBANK_THROWAWAY=1 is set and nvidia-smi answers (a machine given back after);
 #   .whl/   fogbank's Python dependencies as wheels for that machine's Python
 #           (`pip download --no-deps --only-binary=:all: --python-version 3.12 ...`:
 #           the versions in this checkout's .venv, and opentelemetry-api, which fastapi imports);
 #   .old/server   an earlier checkout's server folder (the bench's 'before' server);
 #   OUT     a folder for the results: info.txt, gpu_presets.npz (compare with
-#           `scripts/preset_stills.py compare`), bench/, bench.log, gl.log.
+#           `scripts/preset_stills.py compare`), bench/, bench.log, child.log (the ends of
+#           the bench's server logs), gl.log.
+# docs/bench-gpu.md came from two calls: the first made the stills (its bench failed), the
+# second ran with SKIP_PRESETS=1 BENCH_S=330 GL_S=100.
 # BENCH_S and GL_S bound the bench and the GL tests in seconds; SKIP_PRESETS=1 skips the stills.
 set -u
+[ "${FOGBANK_THROWAWAY:-}" = 1 ] && nvidia-smi -L >/dev/null 2>&1 || {
+  echo "gpu_check.sh unpacks GL libraries into /: set FOGBANK_THROWAWAY=1 on a throwaway GPU machine"; exit 2; }
+[ -n "${OUT:-}" ] && [ -d "$OUT" ] || { echo "OUT must name an existing folder for the results"; exit 2; }
+ls .gl/*.deb >/dev/null 2>&1 && ls .whl/*.whl >/dev/null 2>&1 || { echo "no .gl/*.deb or .whl/*.whl here"; exit 2; }
 export PYTHONUNBUFFERED=1
 T0=$(date +%s)
 stamp(){ echo "== $(( $(date +%s)-T0 )) s: $*"; }
-for f in .gl/*.deb; do dpkg -x $f /; done; ldconfig
+for f in .gl/*.deb; do dpkg -x "$f" /; done; ldconfig
 python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site .whl/*.whl || { echo "pip failed"; exit 3; }
 export PYTHONPATH=/tmp/site:$PWD/server
 export GLCONTEXT_LINUX_LIBGL=libOpenGL.so.0 GLCONTEXT_LINUX_LIBEGL=libEGL.so.1
@@ -24,7 +32,7 @@ V=/usr/local/nvidia/share/glvnd/egl_vendor.d/10_nvidia.json
   python3 -c "import numpy, PIL; print('numpy', numpy.__version__, 'pillow', PIL.__version__)"; } 2>&1 | tee $OUT/info.txt
 stamp probe
 python3 -c "from fogbank.render.renderer import create_context, Renderer; print(Renderer(create_context()).info())" 2>&1 | tail -6 | tee -a $OUT/info.txt
-if ! grep -q "renderer" $OUT/info.txt; then
+if ! grep -q "'renderer':" "$OUT/info.txt"; then
   ls -la /usr/local/nvidia /usr/local/nvidia/lib64 2>&1 | head -40; ls /usr/share/glvnd/egl_vendor.d /usr/local/nvidia/share/glvnd/egl_vendor.d 2>&1
   ldconfig -p | grep -iE "egl|libGL|OpenGL|nvidia" | head -30; exit 4
 fi

@@ -3,13 +3,11 @@ closed forms (so its step counts are honest), and the report is written from res
 
 from __future__ import annotations
 
-import os
-
 import numpy as np
 import pytest
 
 from fogbank.render.probes import fog_only
-from fogbank.tools.bench import _kind_looks, _reference, _tree_env, markdown
+from fogbank.tools.bench import _kind_looks, _reference, markdown
 
 
 @pytest.mark.parametrize("kind", ["homogeneous", "height", "cosine", "polynomial", "potential", "sphere"])
@@ -67,24 +65,27 @@ def test_process_boundary_is_measured_through_real_workers():
     assert "## 7. The process boundary" in markdown(res)
 
 
+def figures(fps720, lat, ratio):
+    """What targets() returns, with the figures the tests vary."""
+    return {"drag_1280x720": {"fps": fps720, "width": 640, "render_ms": 40},
+            "still_1280x720": {"fps": 41.0}, "drag_640x360": {"fps": 20.0},
+            "orbit_1280x720_nomsaa_ms": 100.0, "orbit_1280x720_msaa_ms": 200.0,
+            "orbit_640x360_nomsaa_ms": 40.0, "orbit_640x360_msaa_ms": 90.0,
+            "vtk": {"version": "9", "gl": "llvmpipe", "triangles": 5, "ms_1280x720": 300.0,
+                    "ms_640x360": 80.0, "fogbank_ms_1280x720": 300.0 / ratio, "ratio_1280x720": ratio},
+            "where_720p": {"scene": 50.0},
+            "costly": [{"look": "16 x sphere", "p50_ms": 50, "p95_ms": lat, "max_ms": lat, "preview_width": 480,
+                        "render_ms": 30}, {"look": "16 x height", "p50_ms": 20, "p95_ms": 60, "max_ms": 70,
+                                           "preview_width": 960, "render_ms": 10}],
+            "workers": [{"workers": 1, "aggregate_fps": 20.0}, {"workers": 2, "aggregate_fps": 25.0}],
+            "analytic": {"cosine": 12.0, "potential": 9.0}}
+
+
 def test_the_targets_table_reads_each_figure_and_judges_it_against_its_target():
     """Issue 13's table: each target's figure from the results, before and now, and 'met'
     by the target's own direction (fps and ratios at least, latency at most)."""
     from fogbank.tools.bench import targets_markdown
 
-    def figures(fps720, lat, ratio):
-        return {"drag_1280x720": {"fps": fps720, "width": 640, "render_ms": 40},
-                "still_1280x720": {"fps": 41.0}, "drag_640x360": {"fps": 20.0},
-                "orbit_1280x720_nomsaa_ms": 100.0, "orbit_1280x720_msaa_ms": 200.0,
-                "orbit_640x360_nomsaa_ms": 40.0, "orbit_640x360_msaa_ms": 90.0,
-                "vtk": {"version": "9", "gl": "llvmpipe", "triangles": 5, "ms_1280x720": 300.0,
-                        "ms_640x360": 80.0, "fogbank_ms_1280x720": 300.0 / ratio, "ratio_1280x720": ratio},
-                "where_720p": {"scene": 50.0},
-                "costly": [{"look": "16 x sphere", "p50_ms": 50, "p95_ms": lat, "max_ms": lat, "preview_width": 480,
-                            "render_ms": 30}, {"look": "16 x height", "p50_ms": 20, "p95_ms": 60, "max_ms": 70,
-                                               "preview_width": 960, "render_ms": 10}],
-                "workers": [{"workers": 1, "aggregate_fps": 20.0}, {"workers": 2, "aggregate_fps": 25.0}],
-                "analytic": {"cosine": 12.0, "potential": 9.0}}
     res = {"targets": figures(30.0, 240.0, 3.5), "before": {"version": "abc", "targets": figures(9.8, 900.0, 1.2)}}
     md = "\n".join(targets_markdown(res))
     # the delivered figures of an earlier code's server run in the same rounds replace the
@@ -109,9 +110,22 @@ def test_the_targets_table_reads_each_figure_and_judges_it_against_its_target():
     assert "| 16 x sphere | 50 | 240 | 240 | 480 | 30 | 900 |" in md
 
 
-def test_the_earlier_trees_server_has_its_folder_first_and_keeps_the_paths_already_set(monkeypatch, tmp_path):
-    monkeypatch.setenv("PYTHONPATH", os.pathsep.join(["/opt/site", "", "/opt/more"]))
-    env = _tree_env(str(tmp_path / "old" / "server"))
-    assert env == {"PYTHONPATH": os.pathsep.join([str(tmp_path / "old" / "server"), "/opt/site", "/opt/more"])}
-    monkeypatch.delenv("PYTHONPATH")
-    assert _tree_env(str(tmp_path)) == {"PYTHONPATH": str(tmp_path)}
+
+def test_the_report_says_what_before_is_and_scales_every_worker_row_by_one_worker():
+    """The sentence over the targets names what 'before' holds in this run, and the
+    workers table divides each row by the one-worker row, however many rows it has."""
+    from fogbank.tools.bench import targets_markdown
+    t = figures(30.0, 240.0, 3.5)
+    t["workers"] = [{"workers": 1, "aggregate_fps": 100.0}, {"workers": 2, "aggregate_fps": 210.0},
+                    {"workers": 4, "aggregate_fps": 350.0}]
+    md = "\n".join(targets_markdown({"targets": t}))
+    assert "no earlier version was measured" in md
+    assert "| 2 | 210.0 | 2.10x |" in md and "| 4 | 350.0 | 3.50x |" in md and "| 1 | 100.0 | 1.00x |" in md
+    assert "| 2 render workers / 1, aggregate fps | - | 2.10x | - | - |" in md
+    t["before_interleaved"] = {"tree": "/tmp/old/server", **{k: {"fps": 20.0} for k in
+                                                            ("drag_1280x720", "still_1280x720", "drag_640x360")}}
+    md = "\n".join(targets_markdown({"targets": t, "before": {"version": "abc", "targets": {}}}))
+    assert "'before' is the benchmark of abc read from its bench.json" in md
+    assert "a server of the code in `/tmp/old/server`, run in turn with this one's" in md
+    assert "faster machine" not in md
+

@@ -293,11 +293,12 @@ def where_the_time_goes(r: Renderer, w: int = 1280, h: int = 720, n: int = 7, or
 
 def workers_scaling(seconds: float, clients: int = 4) -> list[dict]:
     """Aggregate fps of `clients` streams at 640x360 against 1 and 2 render workers, and 4
-    where the machine has 8 cores or more (a GPU machine: each worker is a process with its
-    own context, and the web process and the clients need cores too)."""
+    where this process may run on 8 cores or more (each worker is a process with its own
+    context, and the web process and the clients need cores too)."""
     from fogbank.tools.bench_stream import delivered_fps
     rows = []
-    for n in (1, 2, 4) if (os.cpu_count() or 1) >= 8 else (1, 2):
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    for n in (1, 2, 4) if cores >= 8 else (1, 2):
         srv = ChildServer(env={"FOGBANK_WORKERS": str(n)})
         try:
             ws = srv.url.replace("http", "ws", 1)
@@ -315,7 +316,8 @@ def workers_scaling(seconds: float, clients: int = 4) -> list[dict]:
 
 def _tree_env(tree: str) -> dict:
     """The environment of a server that runs another checkout's code: its `server` folder
-    first on PYTHONPATH, ahead of what is there already (packages installed by path)."""
+    first on PYTHONPATH, ahead of what is there already (packages installed by path). Empty
+    entries are dropped (Python would read one as the current folder)."""
     paths = [str(Path(tree).resolve())] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p]
     return {"PYTHONPATH": os.pathsep.join(paths)}
 
@@ -607,6 +609,21 @@ def _figure(fn, t: dict | None):
         return None
 
 
+def _before_sentence(res: dict, bi: dict | None) -> str:
+    """What the 'before' column holds in this run: another version's bench.json (--before),
+    a server of another checkout run in turn with this one's (--before-tree), or nothing."""
+    said = []
+    if res.get("before"):
+        said.append(f"'before' is the benchmark of {res['before'].get('version', 'an earlier version')} "
+                    "read from its bench.json (--before), measured in another run")
+    if bi:
+        said.append(f"the delivered frame rates' 'before' is a server of the code in `{bi['tree']}`, "
+                    "run in turn with this one's in the same rounds")
+    if not said:
+        return "Each figure as the issue defines it, measured in this run; no earlier version was measured."
+    return "Each figure as the issue defines it, measured in this run; " + "; ".join(said) + "."
+
+
 def targets_markdown(res: dict) -> list[str]:
     t = res["targets"]
     b = (res.get("before") or {}).get("targets")
@@ -614,12 +631,7 @@ def targets_markdown(res: dict) -> list[str]:
     bi = t.get("before_interleaved")
     if bi:   # the delivered figures' before: measured in turn with this code's, in the same rounds
         b = {**(b or {}), **{k: v for k, v in bi.items() if k != "tree"}}
-    L = ["## 0. Issue 13's targets", "",
-         "Each figure as the issue defines it, measured in this run; 'before' is the same benchmark "
-         f"run on {res.get('before') and res['before'].get('version', 'the earlier version') or '-'} "
-         "(same machine, same session)" + (", and for the delivered frame rates a server of the earlier "
-                                           "code run in turn with this one's in the same rounds" if bi else "")
-         + ". Absolute targets were set on a faster machine than this one.", "",
+    L = ["## 0. Issue 13's targets", "", _before_sentence(res, bi), "",
          "| target | before | now | wanted | met |", "|---|---|---|---|---|"]
     for label, want, fn, unit, how in TARGETS:
         now, was = _figure(fn, t), _figure(fn, b)
@@ -677,8 +689,11 @@ def targets_markdown(res: dict) -> list[str]:
             extra = f" {br['p95_ms']:.0f} |" if br else " - |"
         L.append(f"| {row['look']} | {row['p50_ms']:.0f} | {row['p95_ms']:.0f} | {row['max_ms']:.0f} | "
                  f"{row['preview_width']:.0f} | {row['render_ms']:.0f} |" + extra)
-    L += ["", "Render workers (4 clients at 640x360, aggregate fps):", "", "| workers | fps |", "|---|---|"]
-    L += [f"| {row['workers']} | {row['aggregate_fps']:.1f} |" for row in t["workers"]]
+    L += ["", "Render workers (4 clients at 640x360, aggregate fps):", "",
+          "| workers | fps | / 1 worker |", "|---|---|---|"]
+    one = next(row["aggregate_fps"] for row in t["workers"] if row["workers"] == 1)
+    L += [f"| {row['workers']} | {row['aggregate_fps']:.1f} | {row['aggregate_fps'] / one:.2f}x |"
+          for row in t["workers"]]
     return L + [""]
 
 
