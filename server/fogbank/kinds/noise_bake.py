@@ -20,25 +20,39 @@ def _fade(t):
     return t * t * t * (t * (t * 6 - 15) + 10)  # Perlin 2002 quintic
 
 
-def _perlin_octave(size: int, cells: int, rng: np.random.Generator) -> np.ndarray:
-    g = rng.normal(size=(cells, cells, cells, 3))
-    g /= np.linalg.norm(g, axis=-1, keepdims=True)
+def _corner_maps(size: int, cells: int) -> tuple[np.ndarray, np.ndarray]:
+    """Along one axis, the linear maps from the lattice's `cells` gradients to the `size`
+    texel centres: Q[i, a], the fade weight of lattice point a at texel i (its two
+    neighbouring lattice points, wrapping), and P[i, a], that weight times the texel's
+    offset from a (the gradient's dot product along this axis)."""
     p = (np.arange(size) + 0.5) * cells / size
     i0 = np.floor(p).astype(int)
     f = p - i0
-    X, Y, Z = np.meshgrid(i0, i0, i0, indexing="ij")
-    FX, FY, FZ = np.meshgrid(f, f, f, indexing="ij")
+    u = _fade(f)
+    Q = np.zeros((size, cells))
+    P = np.zeros((size, cells))
+    rows = np.arange(size)
+    for d in (0, 1):
+        a = (i0 + d) % cells
+        w = u if d else 1 - u
+        np.add.at(Q, (rows, a), w)
+        np.add.at(P, (rows, a), w * (f - d))
+    return Q, P
+
+
+def _perlin_octave(size: int, cells: int, rng: np.random.Generator) -> np.ndarray:
+    """One octave of periodic gradient noise at the texel centres, float64:
+    sum over the 8 lattice corners of fade(x) fade(y) fade(z) g . (offset). Each term is a
+    product of one-axis factors (Q along two axes, P along the gradient component's own),
+    so the sum is three tensor contractions of the lattice's gradients (numpy's einsum
+    with BLAS): 128^3 texels of a 128^3 lattice in ~0.3 s, where gathering the 8 corners'
+    gradients for every texel took 2 s for each octave."""
+    g = rng.normal(size=(cells, cells, cells, 3))
+    g /= np.linalg.norm(g, axis=-1, keepdims=True)
+    Q, P = _corner_maps(size, cells)
     out = np.zeros((size, size, size))
-    u, v, w = _fade(FX), _fade(FY), _fade(FZ)
-    for dx in (0, 1):
-        for dy in (0, 1):
-            for dz in (0, 1):
-                gg = g[(X + dx) % cells, (Y + dy) % cells, (Z + dz) % cells]
-                dot = gg[..., 0] * (FX - dx) + gg[..., 1] * (FY - dy) + gg[..., 2] * (FZ - dz)
-                wx = u if dx else 1 - u
-                wy = v if dy else 1 - v
-                wz = w if dz else 1 - w
-                out += wx * wy * wz * dot
+    for c, (A, B, C) in enumerate(((P, Q, Q), (Q, P, Q), (Q, Q, P))):
+        out += np.einsum("ia,jb,kc,abc->ijk", A, B, C, g[..., c], optimize=True)
     return out
 
 
