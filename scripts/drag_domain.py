@@ -6,7 +6,8 @@ drag_latency). Starts its own server on 127.0.0.1 (stopped by PID):
 
     .venv/bin/python scripts/drag_domain.py 12 7      # 12 looks, seed 7
 
-Prints one line per look and the looks whose p95 is over the target, as URL queries.
+Prints one line per look (with the server's process tree RSS after it), the workers
+recycled, and the looks whose p95 is over the target, as URL queries.
 """
 
 from __future__ import annotations
@@ -43,9 +44,11 @@ def main(n: int, seed: int) -> int:
             print(f"{i:2d} p50 {r['p50_ms']:5.0f} p95 {r['p95_ms']:5.0f} max {r['max_ms']:5.0f} ms "
                   f"previews {r['preview_width']:4.0f} px render {r['render_ms']:5.0f} ms first {first} "
                   f"refined {refined} ms | fog_scale {fog.effects.fog_scale} blur {fog.effects.blur} "
-                  f"scene {fog.scene} {kinds}", flush=True)
+                  f"RSS {srv.rss_mb():.0f} MB | scene {fog.scene} {kinds}", flush=True)
             if r["p95_ms"] > TARGET_MS:
                 over.append((i, r["p95_ms"], encode(fog)))
+        events = [line for line in srv.log_text().splitlines() if "recycled" in line or "Traceback" in line]
+        print("\n".join(events) if events else "no worker was recycled")
     finally:
         srv.stop()
     for i, p95, query in over:
