@@ -17,7 +17,8 @@ SLOT = SimpleNamespace(index=0)
 def _client(st, sid, measured_ms=20.0):
     s = Session(sid, now=0.0)
     s.apply(parse('{"type": "view", "width": 64, "height": 64, "fps": 120}'), 0.0)
-    s.last_ms = measured_ms   # as Session.measured leaves it after a frame
+    s.last_ms = measured_ms   # as Session.measured leaves it after a full frame at its level
+    s.last_level = s.refine_level
     c = Client(s, ws=None, addr="127.0.0.1", now=0.0)
     c.slot = SLOT
     st.clients[s.id] = c
@@ -139,3 +140,32 @@ def test_a_frames_budget_is_shared_by_the_sessions_that_play_or_preview_on_its_w
     assert st.sharing(a, 0.0) == 3      # a, b and the one dragging
     assert st.sharing(elsewhere, 0.0) == 1
     assert st.sharing(paused, 0.0) == 3   # itself, b and the one dragging: not a, which started no frame
+
+
+def test_no_second_frame_until_a_full_frame_at_the_level_is_measured():
+    """Found by dragging over looks drawn from the schema: a look's first full frames
+    compiled programs, so they were not measured, and its cheap previews stood for them;
+    two 380 ms frames then ran back to back while a drag's first change waited for both.
+    Measured previews, and a full frame that compiled, allow no queued frame; a full
+    frame measured at the session's level does."""
+    from fogbank.stream.session import INPUT_SETTLE_S
+    st, c = _streamer(measured_ms=None)
+    s = c.session
+    s.last_level = None
+    s.apply(parse('{"type": "interact", "active": true}'), 0.0)
+
+    def draw(now, ms, once=False):
+        job = _start(st, c, now)
+        s.measured(job, ms, now + ms / 1000, once=once)
+        st.frames[0] -= 1
+        s.frame_done(job, sent=True)
+        s.apply(parse('{"type": "ack", "frame": %d}' % job.frame), now + ms / 1000)
+        return job
+    assert draw(0.0, 39.0).full is False
+    s.apply(parse('{"type": "interact", "active": false}'), 0.1)
+    t = 0.1 + INPUT_SETTLE_S + 0.05
+    assert draw(t, 385.0, once=True).full is True    # compiled: not measured
+    assert s.last_ms == 39.0 and st.queue_room(c, t + 0.4) == 1
+    job = draw(t + 0.4, 20.0)
+    assert job.full is True and job.level == s.refine_level
+    assert st.queue_room(c, t + 0.5) == 2

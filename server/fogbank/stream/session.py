@@ -154,6 +154,7 @@ class Session:
         self.preview_rung = 0     # of PREVIEW_RUNGS, for previews
         self.preview_costs: dict[int, tuple[float, float]] = {}   # rung -> (ms, when measured)
         self.last_ms: float | None = None   # the last frame's render time (not one that compiled)
+        self.last_level: int | None = None   # the refinement level last_ms measured (None: a preview)
         self.cost_ratio = 1.0     # measured / estimated render time of this session's frames
         self.calibrated = False   # cost_ratio is measured, not the prior 1.0
         self.refine_level = 0     # the refinement's last quality (Session._refinement)
@@ -582,6 +583,7 @@ class Session:
         if once:   # it compiled a program or baked a noise tile: not what this look costs
             return
         self.last_ms = render_ms
+        self.last_level = job.level if job.full else None
         if job.estimate_ms > 0 and not surprised:   # raw estimate: measured / estimated, smoothed
             r = min(max(render_ms / job.estimate_ms, 0.05), 20.0)
             # the first measurement replaces the prior: smoothed with 1.0, a look the model

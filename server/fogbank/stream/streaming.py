@@ -129,14 +129,19 @@ class Streamer:
         next job's back: 4-6 ms a frame here), at a frame of latency. Not for a preview (a
         drag's frame shows the newest camera); not while another session on the worker
         previews (its preview starts only on an idle worker, which a playing stream would
-        keep full); not before the session's frames are measured, nor when they take over
-        QUEUE_MAX_MS: a preview that input starts can wait behind the queued frame, so
-        that is the most latency the queue adds to it (a look of 16 layers whose full frames
-        took 700 ms kept a drag's first previews 1.4 s behind), and a look that passes the
-        frame deadline never has a second frame waiting to run on the restarted worker."""
+        keep full); not before a full frame at the session's refinement level is measured,
+        nor when it takes over QUEUE_MAX_MS: a preview that input starts can wait behind the
+        queued frame, so that is the most latency the queue adds to it (a look of 16 layers
+        whose full frames took 700 ms kept a drag's first previews 1.4 s behind), and a look
+        that passes the frame deadline never has a second frame waiting to run on the
+        restarted worker. A preview's cost says nothing of a full frame's, nor does another
+        level's: a look's first full frames compiled programs (not measured), its 39 ms
+        previews stood for them, and two of its 380 ms frames ran back to back while a
+        drag's first change waited 690 ms for both."""
         s = client.session
         room = self.frames_per_worker
-        if s.previewing(now) or s.last_ms is None or s.last_ms > QUEUE_MAX_MS:
+        if (s.previewing(now) or s.last_ms is None or s.last_ms > QUEUE_MAX_MS
+                or s.last_level != s.refine_level):
             return room
         if any(c is not client and c.slot is client.slot and c.session.previewing(now)
                for c in self.clients.values()):
