@@ -164,3 +164,12 @@ def test_a_stream_frame_says_whether_the_worker_held_its_scene_pass():
         got += [await reused(turned), await reused(turned, "transmittance")]
         return got
     assert run(body, Settings()) == [False, True, False, True, False, None]
+
+
+def test_workers_bake_with_one_blas_thread():
+    """The noise bake's tensor contractions run on BLAS; each worker gets one BLAS thread
+    (a thread per core in every worker would take the cores of the others' frames)."""
+    async def body(sup: Supervisor):
+        return [(await sup.call(slot, worker.probe, deadline=30))["blas_threads"]
+                for slot in (sup.interactive.slots[0], sup.batch.slots[0])]
+    assert run(body, Settings()) == ["1", "1"]

@@ -170,7 +170,8 @@ def probe() -> dict[str, Any]:
         ok = r.probe()
         if not ok:   # the pipeline answers but draws wrong: not alive
             raise RuntimeError("GL error after a job: the probe read back the wrong colour")
-        return {"ok": ok, "ms": (time.perf_counter() - t0) * 1000.0, "info": r.info()}
+        return {"ok": ok, "ms": (time.perf_counter() - t0) * 1000.0, "info": r.info(),
+                "blas_threads": os.environ.get("OPENBLAS_NUM_THREADS")}
     return _run(fn)
 
 
