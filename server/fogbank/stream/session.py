@@ -49,8 +49,9 @@ PREVIEW_COST_TTL_S = 2.0   # a rung's measured cost is trusted this long (the lo
 # frames at the old size before the ladder came down.
 PREVIEW_RECOST = 1.5
 # A first preview is far over the budget past this many budgets (485 ms): the default look's
-# first preview, uncalibrated, is estimated at 256 ms at 960x540 and 371 ms at 1280x720
-# (measured 20-60 ms) and starts on the sharpest rung; at 1920x1080, 699 ms, it starts lower.
+# first preview, uncalibrated, is estimated at 176 ms at 960x540 and 291 ms at 1280x720
+# (measured 20-60 ms; 256 and 371 ms before the scene pass's refit, workers/cost.py) and
+# starts on the sharpest rung; at 1920x1080, 619 ms, it starts lower.
 # The model's estimate is the least it is taken for here, calibrated or not: a session's
 # ratio is measured on its full frames, and one below 1 made 16 layers of every kind start
 # their drag at 960 px, 330 ms a frame.
@@ -68,9 +69,9 @@ REFINE_BUDGET_MS = 2000.0
 # for one change, not only for most changes of a drag: at 300 ms, 16 layers of volume
 # noise held a drag's first change for 390-450 ms. The scene pass the worker holds (the
 # camera still) is not in the estimate. A new session's first frames, not yet calibrated,
-# may be reduced: the default look at 960x540 is estimated at 362 ms with MSAA (measured
-# 166), so its first frame is 720 px wide (at 0.1 s), and the next, calibrated, the full
-# look (at 0.3-0.4 s; at 1280x720 alike). Sessions that play or preview on one worker
+# may be reduced: the default look at 960x540 is estimated at 298 ms with MSAA (measured
+# 166), so its first frame is 960 px wide without MSAA (at 0.1 s), and the next,
+# calibrated, the full look (at 0.3-0.4 s; at 1280x720 alike). Sessions that play or preview on one worker
 # share it: their frames are drawn in turn, so an input waits for theirs too, and each
 # session's frames are held to this over their number (Streamer.sharing). Four 1280x720
 # streams on one worker, two of whose scene passes its cache holds: the other two drew
@@ -453,8 +454,9 @@ class Session:
         and to a level not measured only next to one that was (a preview measures its
         rung's level). Each level's estimate is calibrated by what its own frames (and
         previews) measured against theirs, else by the nearest cheaper level's that were
-        measured, else by the session's: 16 layers of every kind were estimated at 497 ms
-        240 px wide and at 865 ms 960 px wide, measured at 7-20 and 230-250; calibrated by one ratio
+        measured, else by the session's: 16 layers of every kind were estimated (before the
+        scene pass's refit, workers/cost.py) at 497 ms 240 px wide and at 865 ms 960 px wide,
+        measured at 7-20 and 230-250; calibrated by one ratio
         (0.06 after 240 px previews), a new session's first refinements were 960 px wide
         with MSAA, 700-930 ms each, and then went back and forth between 336 and 960 px; a
         slider's change waited for such a frame (p95 580-650 ms)."""

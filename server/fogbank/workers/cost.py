@@ -20,10 +20,10 @@ from fogbank.render.targets import FOG_BPP, GBUFFER_BPP, LINEAR_BPP, MSAA_BPP, M
 
 # seconds on the reference machine
 # The scene pass (with the sky, and the resolve with MSAA), drawn over the countryside
-# (the costliest scene) with the GL finished after each pass (scripts/cost_fit.py):
+# (the costliest scene) with the GL finished after each pass, the sun still (scripts/cost_fit.py):
 # 7 ms at 160x90 and 240x135, 37 ms at 960x540, 47 ms at 1280x720 without MSAA; 16, 25,
 # 126 and 180 ms with it. The fixed part was 0.10 s: a 240x135 preview was estimated at
-# 17 times its scene pass and a 960x540 frame at 4 times, so a session calibrated on its
+# 15 times its scene pass and a 960x540 frame at 4 times, so a session calibrated on its
 # previews (stream/session.py) took its larger frames for 2-3 times cheaper than they were.
 SCENE_FIXED_S = 0.02          # shadow map check, terrain vertex work, programs
 SCENE_S_PER_MPX = 0.28        # the scene pass with 4x MSAA, per megapixel
