@@ -17,6 +17,11 @@ TEX = {"uColor": 0, "uInvDist": 1, "uFog": 2, "uParticles": 3, "uNoise": 4, "uSh
        "uHeldA": 15, "uHeldB": 16, "uHeldW": 17}
 
 
+def usable_cores() -> int:
+    """The cores this process may run on (its affinity), else the machine's."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+
+
 def raster_threads(workers: int = 1) -> int:
     """llvmpipe's raster threads for each of `workers` render processes: one more than
     its share of this process's cores. llvmpipe's default is one per core; the thread that
@@ -25,8 +30,7 @@ def raster_threads(workers: int = 1) -> int:
     core idle at each. One more: a 320x180 preview of the default look went from 16.1 to
     12.1 ms (medians of 30 frames, five rounds alternated), 448x252 from 22.7 to 19.2; no
     difference to measure at 640x360 and 1280x720 on this 2-core machine."""
-    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
-    return max(1, cores // max(1, workers)) + 1
+    return max(1, usable_cores() // max(1, workers)) + 1
 
 
 def create_context(backend: str = "auto", device: int | None = None, threads: int = 0) -> moderngl.Context:

@@ -71,11 +71,12 @@ REFINE_BUDGET_MS = 2000.0
 # camera still) is not in the estimate. A new session's first frames, not yet calibrated,
 # may be reduced: the default look at 960x540 is estimated at 298 ms with MSAA (measured
 # 166), so its first frame is 960 px wide without MSAA (at 0.1 s), and the next,
-# calibrated, the full look (at 0.3-0.4 s; at 1280x720 alike). Sessions that play or preview on one worker
-# share it: their frames are drawn in turn, so an input waits for theirs too, and each
-# session's frames are held to this over their number (Streamer.sharing). Four 1280x720
-# streams on one worker, two of whose scene passes its cache holds: the other two drew
-# theirs with MSAA, 230 ms a frame, and each stream got 2.2 frames a second (7.7 shared).
+# calibrated, the full look (at 0.3-0.4 s; at 1280x720 alike). Sessions that play or
+# preview on one worker share it: their frames are drawn in turn, so an input waits for
+# theirs too, and each session's frames are held to this over their number
+# (Streamer.sharing). Four 1280x720 streams on one worker, two of whose scene passes its
+# cache holds: the other two drew theirs with MSAA, 230 ms a frame, and each stream got
+# 2.2 frames a second (7.7 shared).
 PLAY_BUDGET_MS = 200.0
 # While time runs over a still camera, a full frame asks its worker to hold the fog's
 # time-invariant part with the scene pass (render/passes/fog.py), unless some layers move
@@ -419,11 +420,12 @@ class Session:
         from fogbank.workers.cost import estimate
         if steady:
             scene = not self._lost((still.width, still.height))
-            return estimate(still, msaa=msaa, compiled=True, baked=True, scene_cached=scene,
-                            fog_held=scene and self._holds_fog(still)).seconds * 1000.0
-        return estimate(still, msaa=msaa, compiled=True, baked=True,
-                        scene_cached=held and self._scene_cached(still, msaa),
-                        fog_held=held and full and self._fog_held(still, msaa)).seconds * 1000.0
+            fog = scene and self._holds_fog(still)
+        else:
+            scene = held and self._scene_cached(still, msaa)
+            fog = held and full and self._fog_held(still, msaa)
+        return estimate(still, msaa=msaa, compiled=True, baked=True, scene_cached=scene,
+                        fog_held=fog).seconds * 1000.0
 
     def _recost(self, fog: FogParams, now: float) -> None:
         """On a new look whose estimate at the current rung differs from the last costed
@@ -472,9 +474,13 @@ class Session:
 
         lr = {k: r for k, (r, t) in self.level_ratios.items() if now - t <= RATIO_TTL_S}
 
+        costs: dict[tuple[int, bool], float] = {}   # each level's estimate once per frame
+
         def cost(i: int, steady: bool) -> float:
-            ratio = next((lr[j] for j in range(i, n) if j in lr), self.cost_ratio)
-            return ratio * self._estimate_ms(*level(i), full=True, steady=steady)
+            if (i, steady) not in costs:
+                ratio = next((lr[j] for j in range(i, n) if j in lr), self.cost_ratio)
+                costs[i, steady] = ratio * self._estimate_ms(*level(i), full=True, steady=steady)
+            return costs[i, steady]
 
         def known(i: int) -> bool:   # measured, next to a level that was, or cheaper than all
             return not lr or i in lr or i + 1 in lr or i > min(lr)

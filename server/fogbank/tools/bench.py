@@ -297,8 +297,8 @@ def workers_scaling(seconds: float, clients: int = 4) -> list[dict]:
     context, and the web process and the clients need cores too)."""
     from fogbank.tools.bench_stream import delivered_fps
     rows = []
-    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
-    for n in (1, 2, 4) if cores >= 8 else (1, 2):
+    from fogbank.render.gl import usable_cores
+    for n in (1, 2, 4) if usable_cores() >= 8 else (1, 2):
         srv = ChildServer(env={"FOGBANK_WORKERS": str(n)})
         try:
             ws = srv.url.replace("http", "ws", 1)
