@@ -9,8 +9,10 @@ import numpy as np
 from fogbank.model import presets as P
 from fogbank.model.fields import srgb_to_linear
 from fogbank.model.params import StillParams
-from fogbank.render.resources import LIGHTMAP_SIZE, SHADOW_SIZE
+from fogbank.render.resources import SHADOW_SIZE
 from fogbank.scene import terrain
+
+LIGHTMAP_SIZE = SHADOW_SIZE   # the full map's lightmap has its texels
 
 LOW_SUN = {"azimuth": 120.0, "elevation": 12.0, "color": "#ffffff", "intensity": 2.0}
 
@@ -133,3 +135,54 @@ def test_the_scene_pass_lights_each_terrain_pixel_by_the_lightmap_at_its_place(r
     # does that differ from the filter at the pixel's own point (1.3% of pixels here)
     assert float(np.median(diff)) < 0.02
     assert float(np.mean(diff > 0.3)) < 0.03
+
+
+def test_a_previews_map_is_drawn_for_a_sun_the_full_map_is_not_and_shows_its_shadows(renderer):
+    """A preview (draft) whose sun the full map was not drawn for is lit by the preview map
+    (render/resources.py DRAFT_SHADOW_SIZE, terrain at DRAFT_SHADOW_LEVEL): the full map is
+    left as it was, and the preview map's lightmap is the full map's, coarser: averaged
+    over the 4x4 full texels under each of its texels the two agree but at shadow edges,
+    with as much ground in shadow, and neither is lighter on average. The preview picture against the full-quality one (no
+    fog): within a few levels but along shadow edges."""
+    from fogbank.render.resources import DRAFT_SHADOW_SIZE
+    still = _look()
+    full_depth, full_lm, _, _ = _maps(renderer, still)
+    full_img = renderer.render(still, slot="test-shadow", msaa=False)
+    renderer.shadow.key = None   # the full map is no sun's now: a preview takes its own
+    drawn = renderer.shadow.drawn
+    img = renderer.render(still, slot="test-shadow-draft", msaa=False, draft=True)
+    assert (renderer.shadow.drawn, renderer.shadow.key) == (drawn, None)
+    sm = renderer.draft_shadow
+    assert sm.key == (still.scene, still.sun.azimuth, still.sun.elevation)
+    n = DRAFT_SHADOW_SIZE
+    lm = np.frombuffer(sm.lightmap.read(), np.uint8).reshape(n, n) / 255.0
+    k = LIGHTMAP_SIZE // n
+    coarse = full_lm.reshape(n, k, n, k).mean(axis=(1, 3))
+    diff = np.abs(lm - coarse)
+    # 0.042 here; its depth bias at the full map's, acne stripes the ground: 0.154
+    assert float(np.mean(diff)) < 0.06
+    assert float(np.mean(diff > 0.25)) < 0.08
+    assert abs(float(np.mean(lm - coarse))) < 0.03
+    assert abs(float(np.mean(lm < 0.5)) - float(np.mean(coarse < 0.5))) < 0.03
+    px = np.abs(img.astype(int) - full_img.astype(int)).max(axis=2)
+    assert float(px.mean()) < 1.0
+    assert float(np.percentile(px, 99)) <= 12
+
+
+def test_a_full_frame_never_reuses_a_scene_pass_lit_by_the_previews_map(renderer):
+    """A preview's scene pass lit by the preview map is held for the next previews, never
+    for a full frame at its size, with MSAA or without: that frame's pixels are those of a
+    slot that never drew a preview. A preview after the full map is drawn for its sun is
+    lit by it: the full frame's pixels."""
+    still = _look(sun={**LOW_SUN, "azimuth": 75.0})
+    renderer.shadow.key = None
+    renderer.render(still, slot="test-draft-a", msaa=False, draft=True)
+    again = renderer.render(still.model_copy(update={"time": still.time + 1.0}), slot="test-draft-a",
+                            msaa=False, draft=True)
+    assert renderer.caches.gbuffer("test-draft-a", still.width, still.height, True).scene_key[4] is True
+    full = renderer.render(still, slot="test-draft-a", msaa=False)
+    fresh = renderer.render(still, slot="test-draft-b", msaa=False)
+    assert np.array_equal(full, fresh) is True
+    assert np.array_equal(again, fresh) is False
+    preview = renderer.render(still, slot="test-draft-c", msaa=False, draft=True)
+    assert np.array_equal(preview, fresh) is True

@@ -173,3 +173,30 @@ def test_workers_bake_with_one_blas_thread():
         return [(await sup.call(slot, worker.probe, deadline=30))["blas_threads"]
                 for slot in (sup.interactive.slots[0], sup.batch.slots[0])]
     assert run(body, Settings()) == ["1", "1"]
+
+
+def test_a_frame_that_drew_the_full_shadow_map_did_work_once():
+    """worker.frame's `once` for the sun: a full frame for a sun the worker's full shadow
+    map was not drawn for draws it (134-139 ms here whatever the frame's size), paid once,
+    so not the look's cost (stream/session.py calibrates nothing on it); the next frame
+    with that sun does not. A preview (draft) with a new sun draws the preview map, which
+    a dragged sun pays every frame: its cost, not once."""
+    from fogbank.model.params import StillParams
+    from fogbank.model.presets import preset_dict
+    look = StillParams.model_validate({**preset_dict("default"), "width": 160, "height": 90})
+
+    def sun(az):
+        return look.model_copy(update={"sun": look.sun.model_copy(update={"azimuth": az})})
+
+    async def body(sup: Supervisor):
+        slot = sup.interactive.slots[0]
+
+        async def once(still, draft):
+            out = await sup.call(slot, worker.frame, still, "s", not draft, 80, "shaded", 0, False, draft,
+                                 deadline=30)
+            return out["once"]
+        await once(sun(50.0), False)   # compiles what a first frame compiles
+        await once(sun(51.0), True)
+        return [await once(sun(40.0), False), await once(sun(40.0), False), await once(sun(41.0), True),
+                await once(sun(42.0), True)]
+    assert run(body, Settings()) == [True, False, False, False]

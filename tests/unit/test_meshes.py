@@ -300,3 +300,25 @@ def test_the_far_lands_skirt_reaches_below_every_edge_chunk_at_any_level():
             assert float(-step.min()) <= own_depth
             worst = max(worst, float(step.max()))
     assert worst > 0.05   # the coarse levels do run below the grid there
+
+
+@pytest.mark.parametrize("level", range(len(meshes.LOD_STRIDES)))
+def test_the_terrain_at_one_level_tiles_the_plane_without_a_crack(level):
+    """meshes.terrain_at_level, what a coarse shadow map is drawn from: projected onto the
+    ground, its triangles cover the square of side 2 SKIRT_OUTER once (areas sum to it);
+    inside the detailed square every edge of the chunks' cells is shared by two triangles
+    (neighbours meet border to border, no crack for light to leak through), so the edges
+    used once all lie on that square's border; and it has fewer triangles than the level
+    before."""
+    m = meshes.build("countryside")
+    E = terrain.EXTENT
+    idx = meshes.terrain_at_level(m, level)
+    area = np.abs(_signed_areas(m.terrain_vertices, idx)).sum()
+    assert float(area) == pytest.approx((2 * meshes.SKIRT_OUTER) ** 2, rel=1e-6)
+    cells = idx[:len(idx) - m.terrain_far[1] - m.terrain_far_skirt[1]]
+    xz = m.terrain_vertices[:, [0, 2]].astype(np.float64)
+    open_edges = np.array(sorted(_border_edges(cells)))
+    on_border = np.isclose(np.abs(xz[open_edges]), E, atol=1e-3).any(axis=2).all(axis=1)
+    assert int((~on_border).sum()) == 0
+    if level:
+        assert len(idx) < len(meshes.terrain_at_level(m, level - 1))

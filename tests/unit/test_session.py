@@ -582,3 +582,21 @@ def test_a_level_measured_costly_is_tried_again_after_its_ratio_expires():
     assert s._lost((960, 540))
     s.now = 20.0 + LOST_S
     assert not s._lost((960, 540))
+
+
+def test_a_previews_scene_pass_is_held_for_previews_only():
+    """A preview may be lit by the worker's preview shadow map (render/passes/shadow.py),
+    so the scene pass it drew is held for the next previews at its size, never for a full
+    frame there, with MSAA or without (the worker redraws it: Renderer.begin)."""
+    s = Session("a", now=0.0)
+    s.apply(msg('{"type": "play", "playing": false}'), 0.0)
+    s.apply(msg('{"type": "view", "width": 320, "height": 180}'), 0.0)
+    s.apply(msg('{"type": "camera", "camera": {"yaw": 10}}'), 1.0)
+    first = s.start_frame(1.0)
+    s.frame_done(first, sent=True)
+    s.apply(msg(f'{{"type": "ack", "frame": {first.frame}}}'), 1.0)
+    s.apply(msg('{"type": "params", "params": {"density": 1.5}}'), 1.05)
+    again = s.start_frame(1.05)
+    assert (first.full, again.full, first.scene_cached, again.scene_cached) == (False, False, False, True)
+    assert (first.still.width, again.still.width) == (320, 320)
+    assert (s._scene_cached(again.still, False), s._scene_cached(again.still, True)) == (False, False)

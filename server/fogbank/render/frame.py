@@ -100,6 +100,7 @@ class Frame:
     plan: Future                   # FogPlan, prepared off the GL thread
     scene_key: tuple = ()
     scene_cached: bool = False
+    shadow: Any = None             # the shadow map it is lit by (render/resources.py ShadowMap)
     held_fog: Any = None           # the held fog this frame's fog was drawn over (render/targets.py HeldFog)
     # the fog target's channels already filtered ("T", "lit": a held fog's, passes/fog.py)
     filtered: set = field(default_factory=set)

@@ -20,7 +20,9 @@ from fogbank.render.gl import create_context  # noqa: F401  (the worker's entry 
 from fogbank.render.passes import FRAME_PASSES
 from fogbank.render.programs import FULLSCREEN, Programs
 from fogbank.render.rays import RayCaster
-from fogbank.render.resources import Meshes, NoiseTiles, ShadowMap, particle_texture
+from fogbank.render.passes.shadow import sun_key
+from fogbank.render.resources import (DRAFT_SHADOW_BIAS, DRAFT_SHADOW_LEVEL, DRAFT_SHADOW_SIZE, Meshes,
+                                     NoiseTiles, ShadowMap, particle_texture)
 from fogbank.render.targets import TargetCache
 from fogbank.scene import camera as cam
 
@@ -39,6 +41,7 @@ class Renderer:
         self.blur_prog = self.programs.get(FULLSCREEN, "passes/blur.frag")
         self.meshes = Meshes(ctx, self.terrain_prog, self.scene_prog, self.shadow_prog, self.lightmap_prog)
         self.shadow = ShadowMap(ctx)
+        self.draft_shadow = ShadowMap(ctx, DRAFT_SHADOW_SIZE, DRAFT_SHADOW_LEVEL, DRAFT_SHADOW_BIAS)   # previews' (passes/shadow.py)
         self.noise = NoiseTiles(ctx)
         self.particles = particle_texture(ctx)
         self.caches = TargetCache(ctx, cache_bytes, clock)
@@ -51,30 +54,39 @@ class Renderer:
 
     # ------------------------------------------------------------ frames
 
-    def begin(self, still, slot: str = "still", msaa: bool = True, hold_fog: bool = False) -> Frame:
+    def begin(self, still, slot: str = "still", msaa: bool = True, hold_fog: bool = False,
+              draft: bool = False) -> Frame:
         """A frame's inputs: its targets and view, and its fog plan set going on the
         preparation thread. `hold_fog`: with the scene pass held (the camera still), the
-        fog's time-invariant part is kept with it for the next frames (passes/fog.py)."""
+        fog's time-invariant part is kept with it for the next frames (passes/fog.py).
+        `draft`: a preview, lit by the preview shadow map unless the full one is this
+        sun's (passes/shadow.py)."""
         w, h = still.width, still.height
         view = cam.view(still.camera, w, h)
         g = self.caches.gbuffer(slot, w, h, still.effects.sun_through_fog)
-        key = (still.scene, still.camera, still.sun, msaa)
-        # a preview happily reuses a full-quality scene pass
-        cached = g.scene_key == key or (not msaa and g.scene_key == key[:3] + (True,))
+        coarse = draft and self.shadow.key != sun_key(still)
+        key = (still.scene, still.camera, still.sun, msaa, coarse)
+        # a preview happily reuses a full-quality scene pass, and one lit by the preview
+        # shadow map; a frame without MSAA, one with it; never the other way round
+        old = g.scene_key
+        cached = (old is not None and old[:3] == key[:3] and (old[3] or not msaa) and (draft or not old[4]))
         g.last_frame = "reused" if cached else ("new" if g.scene_key is None else "redrawn")
         self.scene_reused = cached
         # the plan's split (FogPlan.split) is what asks the fog pass to hold
         plan = self._prep.submit(plan_fog, still, still.time, view.eye, self.sims, hold_fog and cached)
         return Frame(still=still, slot=slot, msaa=msaa, view=view,
                      targets=self.caches.targets(w, h), gbuffer=g, plan=plan,
-                     scene_key=key, scene_cached=cached)
+                     scene_key=key, scene_cached=cached,
+                     shadow=self.draft_shadow if coarse else self.shadow)
 
-    def render(self, still, slot: str = "still", msaa: bool = True, hold_fog: bool = False) -> np.ndarray:
+    def render(self, still, slot: str = "still", msaa: bool = True, hold_fog: bool = False,
+               draft: bool = False) -> np.ndarray:
         """The frame as (height, width, 3) uint8 sRGB, top row first. `slot` names whose
         scene pass is cached (a session id; stills share one); `msaa` off is the cheap
-        preview used while a user drags; `hold_fog` keeps the fog's time-invariant part
-        while the camera stays (a stream's frames: time runs, the camera is still)."""
-        frame = self.begin(still, slot, msaa, hold_fog)
+        preview used while a user drags, and `draft` lets it take the preview shadow map;
+        `hold_fog` keeps the fog's time-invariant part while the camera stays (a stream's
+        frames: time runs, the camera is still)."""
+        frame = self.begin(still, slot, msaa, hold_fog, draft)
         for p in FRAME_PASSES:
             p.run(self, frame)
         self.keep_only(frame)

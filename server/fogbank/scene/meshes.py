@@ -301,6 +301,26 @@ def _terrain_lods(verts: np.ndarray, n: int, first: int):
             np.array(lowered, dtype=np.float32))
 
 
+def terrain_at_level(mesh: Mesh, level: int) -> np.ndarray:
+    """The terrain's indices with every chunk at one level of detail (LOD_STRIDES[level]),
+    then the far land and its inner skirt: what a coarse shadow map is drawn from
+    (render/passes/shadow.py). No chunk's skirt: chunks at one level meet border to border
+    (a shared border is cut at the same grid lines from both sides, _lines); the far
+    land's inner skirt fills the step between its edge, the full grid's, and a coarse
+    edge chunk's."""
+    table = mesh.terrain_chunks
+    parts = []
+    for k, row in enumerate(table):
+        if level == 0:
+            first, count = int(row[0]), int(row[1])
+        else:
+            first, count = int(row[4 + 2 * level]), int(row[5 + 2 * level]) - int(mesh.terrain_skirts[k, level])
+        parts.append(mesh.terrain_indices[first:first + count])
+    for first, count in (mesh.terrain_far, mesh.terrain_far_skirt):
+        parts.append(mesh.terrain_indices[first:first + count])
+    return np.concatenate(parts)
+
+
 def lod_errors(verts: np.ndarray, indices: np.ndarray, n: int = TERRAIN_CELLS) -> float:
     """The vertical error (m) of grid triangles against the full-detail grid: the largest
     |height of the triangles - height of the grid vertex| over the grid vertices they

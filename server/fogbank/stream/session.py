@@ -166,8 +166,10 @@ class Session:
         self.now = 0.0   # the latest start_frame's time
         self.costed: tuple[int, FogParams | None] = (-1, None)   # the look last costed, and its version
         # the scene pass this session's worker holds at each frame size: (scene, camera, sun,
-        # sunlight target) and whether with MSAA (render/targets.py keeps one per slot and size)
-        self.scenes: dict[tuple[int, int], tuple[tuple, bool]] = {}
+        # sunlight target), whether with MSAA and whether a preview drew it (render/targets.py
+        # keeps one per slot and size; a preview's may be lit by the preview shadow map,
+        # render/passes/shadow.py, which only previews reuse)
+        self.scenes: dict[tuple[int, int], tuple[tuple, bool, bool]] = {}
         # the sizes whose scene pass the worker let go although this session drew it last
         # (its cache outgrew its budget, render/targets.py): until a frame finds it held
         # again, frames are estimated with their scene pass drawn (measured)
@@ -383,15 +385,16 @@ class Session:
         being started (self.now)."""
         return self.now - self.scenes_lost.get(size, -math.inf) < LOST_S
 
-    def _scene_cached(self, still: StillParams, msaa: bool) -> bool:
+    def _scene_cached(self, still: StillParams, msaa: bool, draft: bool = False) -> bool:
         """Whether the worker holds this frame's scene pass: the last frame at its size drew
-        the same scene, camera and sun (a frame without MSAA reuses one with it)."""
+        the same scene, camera and sun (a frame without MSAA reuses one with it, a preview
+        (`draft`) a full frame's, a full frame no preview's)."""
         size = (still.width, still.height)
         drawn = self.scenes.get(size)
         return (not self._lost(size) and drawn is not None and drawn[0] == self._scene_of(still)
-                and (drawn[1] or not msaa))
+                and (drawn[1] or not msaa) and (draft or not drawn[2]))
 
-    def _drew(self, still: StillParams, msaa: bool, hold_fog: bool = False) -> None:
+    def _drew(self, still: StillParams, msaa: bool, hold_fog: bool = False, draft: bool = False) -> None:
         size, key = (still.width, still.height), self._scene_of(still)
         last, frames = self.fogs.pop(size, (None, 0))
         if hold_fog and self._scene_cached(still, msaa):   # fog is held only over a held scene pass
@@ -399,9 +402,9 @@ class Session:
             self.fogs[size] = (fog, frames + 1 if fog == last else 1)
             while len(self.fogs) > 2 * len(PREVIEW_RUNGS):
                 self.fogs.pop(next(iter(self.fogs)))
-        if not self._scene_cached(still, msaa) or msaa:
+        if not self._scene_cached(still, msaa, draft) or msaa:
             self.scenes.pop(size, None)
-            self.scenes[size] = (key, msaa)
+            self.scenes[size] = (key, msaa, draft)
             while len(self.scenes) > 2 * len(PREVIEW_RUNGS):
                 self.scenes.pop(next(iter(self.scenes)))
 
@@ -422,7 +425,7 @@ class Session:
             scene = not self._lost((still.width, still.height))
             fog = scene and self._holds_fog(still)
         else:
-            scene = held and self._scene_cached(still, msaa)
+            scene = held and self._scene_cached(still, msaa, draft=not full)
             fog = held and full and self._fog_held(still, msaa)
         return estimate(still, msaa=msaa, compiled=True, baked=True, scene_cached=scene,
                         fog_held=fog).seconds * 1000.0
@@ -530,8 +533,8 @@ class Session:
             reduced = self.refine_level > 0
             estimate_ms = self._estimate_ms(still, msaa=msaa, full=True)
         hold = not preview and self._holds_fog(still)
-        cached = self._scene_cached(still, not preview and msaa)
-        self._drew(still, not preview and msaa, hold)
+        cached = self._scene_cached(still, not preview and msaa, preview)
+        self._drew(still, not preview and msaa, hold, preview)
         self.frame += 1
         self.making += 1
         self.last_start = now

@@ -211,7 +211,7 @@ class Streamer:
         try:
             try:
                 out = await self.workers.call(slot, worker.frame, job.still, s.id, job.msaa, job.quality,
-                                              job.show, job.layer, job.hold_fog,
+                                              job.show, job.layer, job.hold_fog, not job.full,
                                               deadline=self.settings.frame_deadline_s)
                 slot.drew(cost.program_key(job.still))
             finally:

@@ -176,9 +176,10 @@ def probe() -> dict[str, Any]:
 
 
 def frame(still, slot: str, msaa: bool, quality: int, show: str = "shaded", layer: int = 0,
-          hold_fog: bool = False) -> dict[str, Any]:
+          hold_fog: bool = False, draft: bool = False) -> dict[str, Any]:
     """One stream frame as JPEG; `slot` names the session whose scene pass is cached, and
-    `hold_fog` keeps its time-invariant fog with it (stream/session.py decides when).
+    `hold_fog` keeps its time-invariant fog with it (stream/session.py decides when);
+    `draft`, a preview, may be lit by the preview shadow map (render/passes/shadow.py).
     `show` other than "shaded" draws a view that teaches instead (render/teach.py), and
     its numbers and legend come back as "stats"."""
     from fogbank.render import teach
@@ -187,9 +188,9 @@ def frame(still, slot: str, msaa: bool, quality: int, show: str = "shaded", laye
     def fn(r):
         t0 = time.perf_counter()
         stats, reused = None, None
-        work = (r.programs.compiled, r.noise.baked)
+        work = (r.programs.compiled, r.noise.baked, r.shadow.drawn)
         if show == "shaded":
-            img = r.render(still, slot=slot, msaa=msaa, hold_fog=hold_fog)
+            img = r.render(still, slot=slot, msaa=msaa, hold_fog=hold_fog, draft=draft)
             reused = r.scene_reused
         else:
             img, stats = teach.render(r, still, show, layer, slot=slot)
@@ -197,8 +198,10 @@ def frame(still, slot: str, msaa: bool, quality: int, show: str = "shaded", laye
         data = encode(img, "jpg", quality)
         return {"data": data, "render_ms": (t1 - t0) * 1000.0, "stats": stats,
                 "encode_ms": (time.perf_counter() - t1) * 1000.0,
-                # it compiled a program or baked a noise tile: work done once, not the look's cost
-                "once": (r.programs.compiled, r.noise.baked) != work,
+                # it compiled a program, baked a noise tile or drew the full shadow map for a
+                # new sun: work done once, not the look's cost (a dragged sun's previews
+                # draw the preview map, which is their cost)
+                "once": (r.programs.compiled, r.noise.baked, r.shadow.drawn) != work,
                 # whether it drew over the cached scene pass (None: a view that teaches)
                 "scene_reused": reused}
     return _run(fn)

@@ -131,8 +131,8 @@ class FogPass(Pass):
             # the shadow map spans the scene's bounds (2 half); beyond, nothing is shadowed
             set_uniforms(prog, {"uSunViewProj": f.sun_view_proj, "uEye": v.eye,
                                 "uShaftLength": min(e.sky_distance, 2.0 * half)})
-            r.shadow.nearest.use(TEX["uShadow"])
+            f.shadow.nearest.use(TEX["uShadow"])
         f.gbuffer.invdist.use(TEX["uInvDist"])
         r.programs.draw(prog, moderngl.TRIANGLES)
         if shafts:   # the unit's own filtering again, for the scene pass's PCF
-            r.shadow.nearest.clear(TEX["uShadow"])
+            f.shadow.nearest.clear(TEX["uShadow"])

@@ -11,7 +11,6 @@ import numpy as np
 from fogbank.render.gl import TEX, set_uniforms
 from fogbank.render.passes.base import Pass
 from fogbank.render.passes.sky import scene_target, sun_color
-from fogbank.render.resources import SHADOW_SIZE
 from fogbank.scene import camera as cam
 from fogbank.scene import terrain
 
@@ -61,13 +60,14 @@ class ScenePass(Pass):
         ctx.enable(moderngl.DEPTH_TEST)
         ctx.disable(moderngl.CULL_FACE)
         common = {"uViewProj": view.view_proj, "uSunViewProj": f.sun_view_proj, "uEye": view.eye,
-                  "uSunDir": look.sun.direction(), "uSunColor": sun_color(look), "uShadowTexel": 1.0 / SHADOW_SIZE}
-        r.shadow.tex.use(TEX["uShadow"])
+                  "uSunDir": look.sun.direction(), "uSunColor": sun_color(look), "uShadowTexel": 1.0 / f.shadow.size,
+                  "uShadowBiasScale": f.shadow.bias_scale}
+        f.shadow.tex.use(TEX["uShadow"])
         if mesh.terrain is not None:
             # the terrain first (it hides most of the rest): its chunks in view, nearest first,
             # then the far land
-            set_uniforms(r.terrain_prog, {**common, "uLightmapRect": r.shadow.lightmap_rect})
-            r.shadow.lightmap.use(TEX["uLightmap"])
+            set_uniforms(r.terrain_prog, {**common, "uLightmapRect": f.shadow.lightmap_rect})
+            f.shadow.lightmap.use(TEX["uLightmap"])
             chunks = mesh.chunks
             keep = np.flatnonzero(cam.spheres_in_view(view.view_proj, chunks[:, 2:5], chunks[:, 5]))
             dist = np.linalg.norm(chunks[keep, 2:5] - view.eye, axis=1)

@@ -2,7 +2,9 @@
 terrain's lightmap baked from it (its sun visibility seen from above, passes/lightmap.frag),
 both redrawn only when the scene or the sun changes. A cached scene pass needs no shadow map, but
 light shafts sample it in the fog pass, so then it is made current all the same (one map
-serves every slot of the worker)."""
+serves every slot of the worker). A preview (a user drags) whose sun the full map was not
+drawn for takes the preview map instead (Renderer.begin; resources.DRAFT_SHADOW_SIZE):
+coarser, and about a tenth of the full map's cost, which a dragged sun pays every frame."""
 
 from __future__ import annotations
 
@@ -12,14 +14,18 @@ import numpy as np
 
 from fogbank.render.gl import TEX, set_uniform, set_uniforms
 from fogbank.render.passes.base import Pass
-from fogbank.render.resources import SHADOW_SIZE
 from fogbank.scene import camera as cam
+
+
+def sun_key(look) -> tuple:
+    """What a shadow map is drawn for: the scene and the sun's direction."""
+    return (look.scene, look.sun.azimuth, look.sun.elevation)
 
 
 class ShadowPass(Pass):
     name = "shadow"
     reads = ("look.sun", "meshes")
-    writes = ("shadow_map", "lightmap")
+    writes = ("shadow_map", "lightmap")   # the frame's map: the full or the preview one (f.shadow)
 
     def run(self, r, f) -> None:
         look = f.still
@@ -28,27 +34,31 @@ class ShadowPass(Pass):
         f.sun_view_proj = cam.ortho_sun(look.sun.direction(), center, half)
         if f.scene_cached and look.effects.shafts <= 0:
             return
-        key = (look.scene, look.sun.azimuth, look.sun.elevation)
-        if key == r.shadow.key:
+        sm = f.shadow
+        key = sun_key(look)
+        if key == sm.key:
             return
-        r.shadow.fbo.use()
-        r.shadow.fbo.clear(depth=1.0)
+        sm.fbo.use()
+        sm.fbo.clear(depth=1.0)
         r.ctx.enable(moderngl.DEPTH_TEST)
         r.ctx.disable(moderngl.CULL_FACE)
         set_uniform(r.shadow_prog, "uSunViewProj", f.sun_view_proj)
-        for shadow_vao, count in mesh.shadow:   # the terrain at full detail, and the objects
+        casters, terrain = mesh.casters(sm.level)
+        for shadow_vao, count in casters:   # the terrain at the map's level of detail, and the objects
             shadow_vao.render(moderngl.TRIANGLES, vertices=count)
-        sm = r.shadow
         # the lightmap's square: the shadow map's cube's, in x and z
         sm.lightmap_rect = np.array([center[0] - half, center[2] - half, 0.5 / half, 0.5 / half])
-        if mesh.terrain_bake is not None:
+        if terrain is not None:
             r.ctx.disable(moderngl.DEPTH_TEST)   # a height field: one surface over each texel
             sm.lightmap_fbo.use()
             sm.lightmap_fbo.clear(1.0, 1.0, 1.0, 1.0)
             set_uniforms(r.lightmap_prog, {"uSunViewProj": f.sun_view_proj, "uLightmapRect": sm.lightmap_rect,
-                                           "uSunDir": look.sun.direction(), "uShadowTexel": 1.0 / SHADOW_SIZE})
+                                           "uSunDir": look.sun.direction(), "uShadowTexel": 1.0 / sm.size,
+                                           "uShadowBiasScale": sm.bias_scale})
             sm.tex.use(TEX["uShadow"])
-            mesh.terrain_bake.render(moderngl.TRIANGLES, vertices=mesh.full_detail)
+            bake_vao, count = terrain
+            bake_vao.render(moderngl.TRIANGLES, vertices=count)
             sm.lightmap.build_mipmaps()
             sm.lightmap.filter = (moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR)
         sm.key = key
+        sm.drawn += 1
