@@ -9,6 +9,7 @@ import numpy as np
 from fogbank.model import presets as P
 from fogbank.model.fields import srgb_to_linear
 from fogbank.model.params import StillParams
+from fogbank.render.passes.shadow import sun_key
 from fogbank.render.resources import SHADOW_SIZE
 from fogbank.scene import terrain
 
@@ -71,14 +72,15 @@ def _mesh_height(x: np.ndarray, z: np.ndarray) -> np.ndarray:
 
 def _maps(renderer, still):
     r = renderer
-    r.shadow.key = None   # draw the map and bake the lightmap for this sun
+    r.shadows.clear()   # draw the map and bake the lightmap for this sun
     r.render(still, slot="test-shadow", msaa=False)
-    depth = np.frombuffer(r.shadow.tex.read(), np.float32).reshape(SHADOW_SIZE, SHADOW_SIZE).astype(np.float64)
-    lm = np.frombuffer(r.shadow.lightmap.read(), np.uint8).reshape(LIGHTMAP_SIZE, LIGHTMAP_SIZE) / 255.0
+    sm = r.shadows.get(sun_key(still))
+    depth = np.frombuffer(sm.tex.read(), np.float32).reshape(SHADOW_SIZE, SHADOW_SIZE).astype(np.float64)
+    lm = np.frombuffer(sm.lightmap.read(), np.uint8).reshape(LIGHTMAP_SIZE, LIGHTMAP_SIZE) / 255.0
     from fogbank.scene import camera as cam
     center, half = r.meshes.get(still.scene).bounds
     svp = cam.ortho_sun(still.sun.direction(), center, half)
-    return depth, lm, svp, r.shadow.lightmap_rect
+    return depth, lm, svp, sm.lightmap_rect
 
 
 def test_the_lightmap_is_the_sun_visibility_of_the_terrain_under_each_texel(renderer):
@@ -148,11 +150,11 @@ def test_a_previews_map_is_drawn_for_a_sun_the_full_map_is_not_and_shows_its_sha
     still = _look()
     full_depth, full_lm, _, _ = _maps(renderer, still)
     full_img = renderer.render(still, slot="test-shadow", msaa=False)
-    renderer.shadow.key = None   # the full map is no sun's now: a preview takes its own
-    drawn = renderer.shadow.drawn
+    renderer.shadows.clear()   # no full map is this sun's now: a preview takes the preview map
+    drawn = renderer.shadows.drawn
     img = renderer.render(still, slot="test-shadow-draft", msaa=False, draft=True)
-    assert (renderer.shadow.drawn, renderer.shadow.key) == (drawn, None)
-    sm = renderer.draft_shadow
+    assert (renderer.shadows.drawn, renderer.shadows.get(sun_key(still))) == (drawn, None)
+    sm = renderer.shadows.draft
     assert sm.key == (still.scene, still.sun.azimuth, still.sun.elevation)
     n = DRAFT_SHADOW_SIZE
     lm = np.frombuffer(sm.lightmap.read(), np.uint8).reshape(n, n) / 255.0
@@ -175,7 +177,7 @@ def test_a_full_frame_never_reuses_a_scene_pass_lit_by_the_previews_map(renderer
     slot that never drew a preview. A preview after the full map is drawn for its sun is
     lit by it: the full frame's pixels."""
     still = _look(sun={**LOW_SUN, "azimuth": 75.0})
-    renderer.shadow.key = None
+    renderer.shadows.clear()
     renderer.render(still, slot="test-draft-a", msaa=False, draft=True)
     again = renderer.render(still.model_copy(update={"time": still.time + 1.0}), slot="test-draft-a",
                             msaa=False, draft=True)
@@ -186,3 +188,27 @@ def test_a_full_frame_never_reuses_a_scene_pass_lit_by_the_previews_map(renderer
     assert np.array_equal(again, fresh) is False
     preview = renderer.render(still, slot="test-draft-c", msaa=False, draft=True)
     assert np.array_equal(preview, fresh) is True
+
+
+def test_the_worker_keeps_a_full_map_for_each_of_a_few_suns(renderer):
+    """Streams with light shafts sample the full shadow map at every frame. Sessions whose
+    suns differ each find theirs kept (resources.SHADOW_MAPS, least recently used let go):
+    frames in turn draw each map once, and show what they showed when it was drawn; a
+    sun past the kept ones takes the least recently used one's place, which is drawn
+    again when its sun returns."""
+    from fogbank.render.resources import SHADOW_MAPS
+    base = _look(effects={**P.preset_dict("default")["effects"], "shafts": 1.0}, density=0.5,
+                 width=160, height=90)
+    suns = [base.model_copy(update={"sun": base.sun.model_copy(update={"azimuth": 60.0 + 30.0 * i})})
+            for i in range(SHADOW_MAPS + 1)]
+    renderer.shadows.clear()
+    drawn = renderer.shadows.drawn
+    first = [renderer.render(s, slot=f"test-suns-{i}", msaa=False) for i, s in enumerate(suns[:SHADOW_MAPS])]
+    again = [renderer.render(s, slot=f"test-suns-{i}", msaa=False) for i, s in enumerate(suns[:SHADOW_MAPS])]
+    assert renderer.shadows.drawn - drawn == SHADOW_MAPS
+    assert [np.array_equal(a, b) for a, b in zip(first, again)] == [True] * SHADOW_MAPS
+    assert np.array_equal(first[0], first[1]) is False   # the suns' shafts differ
+    renderer.render(suns[-1], slot="test-suns-last", msaa=False)
+    back = renderer.render(suns[0], slot="test-suns-0", msaa=False)
+    assert renderer.shadows.drawn - drawn == SHADOW_MAPS + 2
+    assert np.array_equal(back, first[0]) is True

@@ -100,7 +100,8 @@ class Frame:
     plan: Future                   # FogPlan, prepared off the GL thread
     scene_key: tuple = ()
     scene_cached: bool = False
-    shadow: Any = None             # the shadow map it is lit by (render/resources.py ShadowMap)
+    coarse_shadow: bool = False    # lit by the preview shadow map (Renderer.begin)
+    shadow: Any = None             # the shadow map it is lit by (render/resources.py ShadowMap; the shadow pass)
     held_fog: Any = None           # the held fog this frame's fog was drawn over (render/targets.py HeldFog)
     # the fog target's channels already filtered ("T", "lit": a held fog's, passes/fog.py)
     filtered: set = field(default_factory=set)

@@ -21,8 +21,7 @@ from fogbank.render.passes import FRAME_PASSES
 from fogbank.render.programs import FULLSCREEN, Programs
 from fogbank.render.rays import RayCaster
 from fogbank.render.passes.shadow import sun_key
-from fogbank.render.resources import (DRAFT_SHADOW_BIAS, DRAFT_SHADOW_LEVEL, DRAFT_SHADOW_SIZE, Meshes,
-                                     NoiseTiles, ShadowMap, particle_texture)
+from fogbank.render.resources import Meshes, NoiseTiles, ShadowMaps, particle_texture
 from fogbank.render.targets import TargetCache
 from fogbank.scene import camera as cam
 
@@ -40,8 +39,7 @@ class Renderer:
         self.lightmap_prog = self.programs.get("passes/lightmap.vert", "passes/lightmap.frag")
         self.blur_prog = self.programs.get(FULLSCREEN, "passes/blur.frag")
         self.meshes = Meshes(ctx, self.terrain_prog, self.scene_prog, self.shadow_prog, self.lightmap_prog)
-        self.shadow = ShadowMap(ctx)
-        self.draft_shadow = ShadowMap(ctx, DRAFT_SHADOW_SIZE, DRAFT_SHADOW_LEVEL, DRAFT_SHADOW_BIAS)   # previews' (passes/shadow.py)
+        self.shadows = ShadowMaps(ctx)
         self.noise = NoiseTiles(ctx)
         self.particles = particle_texture(ctx)
         self.caches = TargetCache(ctx, cache_bytes, clock)
@@ -59,12 +57,12 @@ class Renderer:
         """A frame's inputs: its targets and view, and its fog plan set going on the
         preparation thread. `hold_fog`: with the scene pass held (the camera still), the
         fog's time-invariant part is kept with it for the next frames (passes/fog.py).
-        `draft`: a preview, lit by the preview shadow map unless the full one is this
-        sun's (passes/shadow.py)."""
+        `draft`: a preview, lit by the preview shadow map unless a full one of this sun
+        is kept (passes/shadow.py)."""
         w, h = still.width, still.height
         view = cam.view(still.camera, w, h)
         g = self.caches.gbuffer(slot, w, h, still.effects.sun_through_fog)
-        coarse = draft and self.shadow.key != sun_key(still)
+        coarse = draft and self.shadows.get(sun_key(still)) is None
         key = (still.scene, still.camera, still.sun, msaa, coarse)
         # a preview happily reuses a full-quality scene pass, and one lit by the preview
         # shadow map; a frame without MSAA, one with it; never the other way round
@@ -76,8 +74,7 @@ class Renderer:
         plan = self._prep.submit(plan_fog, still, still.time, view.eye, self.sims, hold_fog and cached)
         return Frame(still=still, slot=slot, msaa=msaa, view=view,
                      targets=self.caches.targets(w, h), gbuffer=g, plan=plan,
-                     scene_key=key, scene_cached=cached,
-                     shadow=self.draft_shadow if coarse else self.shadow)
+                     scene_key=key, scene_cached=cached, coarse_shadow=coarse)
 
     def render(self, still, slot: str = "still", msaa: bool = True, hold_fog: bool = False,
                draft: bool = False) -> np.ndarray:
@@ -123,9 +120,11 @@ class Renderer:
         return self.caches.nbytes()
 
     def release_caches(self) -> None:
-        """Free every cached target, scene pass and noise tile (a worker over its memory budget)."""
+        """Free every cached target, scene pass, noise tile and full shadow map (a worker
+        over its memory budget)."""
         self.caches.clear()
         self.noise.clear()
+        self.shadows.clear()
 
     def drop_slot(self, slot: str) -> None:
         """Free a slot's cached scene passes (a session ended)."""

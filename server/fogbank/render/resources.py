@@ -3,6 +3,7 @@ texture and the baked noise tiles (caches of their own, apart from the passes)."
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from dataclasses import dataclass
 
 import moderngl
@@ -25,6 +26,11 @@ DRAFT_SHADOW_LEVEL = 2
 # high: the mean |difference| in sun visibility is 0.042 and 0.024 at 3; at 1 acne
 # striped the ground (0.154, 0.059), at 4 light leaked (0.042, 0.028, lighter on average).
 DRAFT_SHADOW_BIAS = 3.0
+# Full maps a worker keeps, by scene and sun (about 21 MB each on llvmpipe). Sessions on
+# one worker whose suns differ each need theirs: for the scene pass of an orbiting camera,
+# and every frame for light shafts. With one map, two streams with shafts and different
+# suns redrew it at every frame: 169 ms a frame at 960x540 against 17.
+SHADOW_MAPS = 3
 NOISE_TILES = 4   # baked tiles kept per worker
 
 
@@ -123,7 +129,44 @@ class ShadowMap:
         self.nearest = ctx.sampler(texture=self.tex, filter=(moderngl.NEAREST, moderngl.NEAREST),
                                    compare_func="<=", repeat_x=False, repeat_y=False)
         self.key: object = None
-        self.drawn = 0   # times drawn (a frame that drew the full map paid once for the sun)
+
+    def release(self) -> None:
+        for obj in (self.nearest, self.fbo, self.tex, self.lightmap_fbo, self.lightmap):
+            obj.release()
+
+
+class ShadowMaps:
+    """The worker's full shadow maps by the (scene, sun) each was drawn for, the least
+    recently used let go past `keep` (SHADOW_MAPS), and the preview map (DRAFT_SHADOW_SIZE).
+    `drawn` counts the full maps drawn: a frame that drew one paid once for its sun."""
+
+    def __init__(self, ctx, keep: int = SHADOW_MAPS):
+        self.ctx, self.keep = ctx, keep
+        self._maps: OrderedDict[tuple, ShadowMap] = OrderedDict()
+        self.draft = ShadowMap(ctx, DRAFT_SHADOW_SIZE, DRAFT_SHADOW_LEVEL, DRAFT_SHADOW_BIAS)
+        self.drawn = 0
+
+    def get(self, key: tuple) -> ShadowMap | None:
+        """The full map drawn for `key`, if kept."""
+        sm = self._maps.get(key)
+        return sm if sm is not None and sm.key == key else None
+
+    def full(self, key: tuple) -> ShadowMap:
+        """The full map for `key`: the one drawn for it, else a new one or the least
+        recently used (its key cleared: the shadow pass draws it)."""
+        if key in self._maps:
+            self._maps.move_to_end(key)
+            return self._maps[key]
+        sm = self._maps.popitem(last=False)[1] if len(self._maps) >= self.keep else ShadowMap(self.ctx)
+        sm.key = None
+        self._maps[key] = sm
+        return sm
+
+    def clear(self) -> None:
+        """Let every full map go (a worker over its memory budget); the preview map stays."""
+        for sm in self._maps.values():
+            sm.release()
+        self._maps.clear()
 
 
 class NoiseTiles:

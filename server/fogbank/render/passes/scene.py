@@ -60,8 +60,8 @@ class ScenePass(Pass):
         ctx.enable(moderngl.DEPTH_TEST)
         ctx.disable(moderngl.CULL_FACE)
         common = {"uViewProj": view.view_proj, "uSunViewProj": f.sun_view_proj, "uEye": view.eye,
-                  "uSunDir": look.sun.direction(), "uSunColor": sun_color(look), "uShadowTexel": 1.0 / f.shadow.size,
-                  "uShadowBiasScale": f.shadow.bias_scale}
+                  "uSunDir": look.sun.direction(), "uSunColor": sun_color(look),
+                  "uShadowTexel": 1.0 / f.shadow.size, "uShadowBiasScale": f.shadow.bias_scale}
         f.shadow.tex.use(TEX["uShadow"])
         if mesh.terrain is not None:
             # the terrain first (it hides most of the rest): its chunks in view, nearest first,

@@ -1,10 +1,11 @@
 """The sun's shadow map: depth of every mesh seen from the sun (orthographic), and the
 terrain's lightmap baked from it (its sun visibility seen from above, passes/lightmap.frag),
-both redrawn only when the scene or the sun changes. A cached scene pass needs no shadow map, but
-light shafts sample it in the fog pass, so then it is made current all the same (one map
-serves every slot of the worker). A preview (a user drags) whose sun the full map was not
-drawn for takes the preview map instead (Renderer.begin; resources.DRAFT_SHADOW_SIZE):
-coarser, and about a tenth of the full map's cost, which a dragged sun pays every frame."""
+both redrawn only when the scene or the sun changes. A cached scene pass needs no shadow
+map, but light shafts sample it in the fog pass, so then it is made current all the same.
+The worker keeps a few full maps by sun (resources.ShadowMaps), which serve every slot. A
+preview (a user drags) whose sun no full map was drawn for takes the preview map instead
+(Renderer.begin; resources.DRAFT_SHADOW_SIZE): coarser, and about a tenth of the full
+map's cost, which a dragged sun pays every frame."""
 
 from __future__ import annotations
 
@@ -34,8 +35,8 @@ class ShadowPass(Pass):
         f.sun_view_proj = cam.ortho_sun(look.sun.direction(), center, half)
         if f.scene_cached and look.effects.shafts <= 0:
             return
-        sm = f.shadow
         key = sun_key(look)
+        sm = f.shadow = r.shadows.draft if f.coarse_shadow else r.shadows.full(key)
         if key == sm.key:
             return
         sm.fbo.use()
@@ -61,4 +62,5 @@ class ShadowPass(Pass):
             sm.lightmap.build_mipmaps()
             sm.lightmap.filter = (moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR)
         sm.key = key
-        sm.drawn += 1
+        if sm is not r.shadows.draft:
+            r.shadows.drawn += 1
