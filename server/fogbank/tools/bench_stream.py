@@ -124,13 +124,23 @@ def run(url: str, query: str = "v=1") -> list[dict]:
     return rows
 
 
+def density_change(i: int) -> dict:
+    """The i-th change of a dragged density slider."""
+    return {"density": 1.0 + 0.02 * (i % 5)}
+
+
+def sun_change(i: int) -> dict:
+    """The i-th change of a dragged sun azimuth slider (2 degrees a change)."""
+    return {"sun": {"azimuth": 30.0 + 2.0 * i}}
+
+
 async def drag_latency(url: str, look: dict, width: int, height: int, changes: int = 24,
-                       every_s: float = 0.15, settle_s: float = 30.0) -> dict:
+                       every_s: float = 0.15, settle_s: float = 30.0, change=density_change) -> dict:
     """A slider dragged over a costly look, as the page does it. The look is set and its
     frames awaited: the first (first_ms: a new fog program compiles on its first draw) and
     the refined one after input stops (refined_ms), `settle_s` at most, as a user looks at
-    a look before changing it. Then `interact` on and a change of the global density every
-    `every_s` while time runs. The latency of each change is the time to the first frame
+    a look before changing it. Then `interact` on and a change (`change(i)`, a params
+    patch: the global density by default) every `every_s` while time runs. The latency of each change is the time to the first frame
     whose params version shows it (a later change's frame counts for it too: the page shows
     the newest look). Also the previews' median width and the frames' render ms."""
     from fogbank.stream.protocol import FLAG_FULL
@@ -177,7 +187,7 @@ async def drag_latency(url: str, look: dict, width: int, height: int, changes: i
                 lat.append((time.monotonic() - pending.pop(0)[1]) * 1000)
         for i in range(changes):
             pending.append((None, time.monotonic()))
-            await ws.send(json.dumps({"type": "params", "params": {"density": 1.0 + 0.02 * (i % 5)}}))
+            await ws.send(json.dumps({"type": "params", "params": change(i)}))
             await _frames(ws, every_s, on_frame=on_frame, on_text=on_state)
         end = time.monotonic() + 10
         while pending and time.monotonic() < end:
