@@ -95,8 +95,11 @@ def test_the_targets_table_reads_each_figure_and_judges_it_against_its_target():
     t["drag_1280x720"]["rounds"] = [28.0, 30.0, 35.0]
     t["before_interleaved"] = {"tree": "/tmp/before/server",
                                **{k: {"fps": v, "rounds": [v - 1, v, v + 2]} for k, v in
-                                  (("drag_1280x720", 20.0), ("still_1280x720", 25.0), ("drag_640x360", 16.0))}}
+                                  (("drag_1280x720", 20.0), ("still_1280x720", 25.0), ("drag_640x360", 16.0))},
+                               "sun_drag": {"p95_ms": 410.0}}
     md2 = "\n".join(targets_markdown({"targets": t, "before": res["before"]}))
+    assert "| the sun dragged, default look, 960x540: control-to-frame p95 | 410.0 ms | 72.0 ms |" in md2
+    assert "and the sun drag's a server of that code run right after this one's" in md2
     assert "| 1280x720 orbiting, delivered to a dragging client | 20.0 fps | 30.0 fps | >= 24 fps | yes |" in md2
     assert "| drag_1280x720 | 30.0 | 28.0, 30.0, 35.0 | 640 | 40 |" in md2
     assert "| drag_1280x720 | 20.0 | 19.0, 20.0, 22.0 | 30.0 | 28.0, 30.0, 35.0 | 1.50 |" in md2

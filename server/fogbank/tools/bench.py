@@ -409,6 +409,13 @@ def targets(r: Renderer, seconds: float, analytic: list[dict], rounds: int = 3,
         out["sun_drag"] = sun_drag_latency(srv)
     finally:
         srv.stop()
+    if before_tree:   # the sun dragged over a server of the earlier code too, right after
+        srv = ChildServer(env=_tree_env(before_tree))
+        try:
+            print(f"  the same with a server of {before_tree}:")
+            out.setdefault("before_interleaved", {"tree": before_tree})["sun_drag"] = sun_drag_latency(srv)
+        finally:
+            srv.stop()
     out["workers"] = workers_scaling(seconds)
     out["analytic"] = {row["kind"]: row["speedup"] for row in analytic}
     return out
@@ -632,7 +639,9 @@ def _before_sentence(res: dict, bi: dict | None) -> str:
                     "read from its bench.json (--before), measured in another run")
     if bi:
         said.append(f"the delivered frame rates' 'before' is a server of the code in `{bi['tree']}`, "
-                    "run in turn with this one's in the same rounds")
+                    "run in turn with this one's in the same rounds"
+                    + (", and the sun drag's a server of that code run right after this one's"
+                       if "sun_drag" in bi else ""))
     if not said:
         return "Each figure as the issue defines it, measured in this run; no earlier version was measured."
     return "Each figure as the issue defines it, measured in this run; " + "; ".join(said) + "."
