@@ -276,7 +276,10 @@ def orbit_frames(r: Renderer, w: int, h: int, msaa: bool, n: int = 9) -> float:
 def where_the_time_goes(r: Renderer, w: int = 1280, h: int = 720, n: int = 7, orbit: bool = True) -> dict:
     """The orbiting frame without MSAA (or, `orbit` False, a stream's frame with the camera
     still and time running: MSAA, the scene pass and the fog that does not move held), pass
-    by pass (the GL finished after each), plus read back and JPEG: median ms each."""
+    by pass (the GL finished after each), plus read back and JPEG: median ms each. The fog
+    plan (particles simulated, layers packed: CPU work on the renderer's preparation thread,
+    render/frame.py) is waited for before the passes and timed with Renderer.begin: in a
+    frame it runs while the GL thread draws the shadow, sky and scene passes."""
     from fogbank.render.passes import FRAME_PASSES
     still = _still("default", w, h)
     times: dict[str, list[float]] = {}
@@ -285,7 +288,10 @@ def where_the_time_goes(r: Renderer, w: int = 1280, h: int = 720, n: int = 7, or
         s = still.model_copy(update={"time": 1.0 + i / 30})
         if orbit:
             s = s.model_copy(update={"camera": still.camera.model_copy(update={"yaw": still.camera.yaw + 2.0 * (i + 1)})})
+        t0 = time.perf_counter()
         f = r.begin(s, "bench-orbit" if orbit else "bench-still", not orbit, hold_fog=not orbit)
+        f.fog_plan()
+        times.setdefault("begin, fog plan", []).append((time.perf_counter() - t0) * 1000)
         for p in FRAME_PASSES:
             r.ctx.finish()
             t0 = time.perf_counter()
