@@ -26,14 +26,29 @@ MAX_IN_FLIGHT = 2
 INPUT_SETTLE_S = 0.25     # after the last input, this long until the full-quality refinement
 VIEW_WAIT_S = 0.3         # a new session waits this long for its client's view size
 PREVIEW_QUALITY = 60      # JPEG quality while the user drags
-# A preview's render budget: a look whose previews take longer is previewed smaller (a
-# costly look blurs while it is dragged instead of dropping the page's frame rate); the
-# frame after input stops has budgets of its own (REFINE_BUDGET_MS, PLAY_BUDGET_MS). It
-# is what a frame may take for a drag to stay at PREVIEW_FPS: the frame's interval less what
-# follows the render (the JPEG, the pipe to the web process, the socket; ~7 ms measured
-# here with `fogbank bench`). At 60 ms, 720p previews were 640 px wide at 15-17 fps.
+# A preview's render budget (preview_budget_ms): a look whose previews take longer is
+# previewed smaller (a costly look blurs while it is dragged instead of dropping the page's
+# frame rate); the frame after input stops has budgets of its own (REFINE_BUDGET_MS,
+# PLAY_BUDGET_MS). It is what a frame may take for a drag to keep its frame rate: the
+# frame's interval less what follows the render (the JPEG, the pipe to the web process,
+# the socket; PREVIEW_AFTER_MS, measured here with `fogbank bench` at 1280x720 and at
+# 640x360 alike). The frame rate is issue 13's for the view's size: PREVIEW_FPS at
+# 1280x720 and larger, PREVIEW_FPS_SMALL at 640x360 and smaller, geometric in the view's
+# pixels between (32 fps at 960x540). At 60 ms, 720p previews were 640 px wide at 15-17
+# fps. With 24 fps at every size, a 640x360 drag's previews were 320 px wide in some
+# rounds of the benchmark (12-14 ms, 48-54 fps delivered) and 480 px in others (20-29 ms,
+# 29-43 fps).
 PREVIEW_FPS = 24.0
-PREVIEW_BUDGET_MS = 1000.0 / PREVIEW_FPS - 7.0
+PREVIEW_FPS_SMALL = 50.0
+PREVIEW_AFTER_MS = 7.0
+PREVIEW_BUDGET_MS = 1000.0 / PREVIEW_FPS - PREVIEW_AFTER_MS   # at 1280x720 and larger
+_LARGE, _SMALL = 1280 * 720, 640 * 360
+
+
+def preview_budget_ms(width: int, height: int) -> float:
+    """The render budget of a preview for a view of this size (PREVIEW_FPS..PREVIEW_FPS_SMALL)."""
+    k = min(1.0, max(0.0, math.log(_LARGE / max(1, width * height)) / math.log(_LARGE / _SMALL)))
+    return 1000.0 / (PREVIEW_FPS * (PREVIEW_FPS_SMALL / PREVIEW_FPS) ** k) - PREVIEW_AFTER_MS
 # The previews' ladder, sharpest first: (share of the view's side, detail). Detail below 1
 # takes that share of each volume-noise layer's samples per ray and of each particle
 # layer's particles (_detailed), the costs a smaller picture does not shrink enough. Few
@@ -48,10 +63,11 @@ PREVIEW_COST_TTL_S = 2.0   # a rung's measured cost is trusted this long (the lo
 # made costly in one step (16 layers of volume noise) would otherwise spend seconds on
 # frames at the old size before the ladder came down.
 PREVIEW_RECOST = 1.5
-# A first preview is far over the budget past this many budgets (485 ms): the default look's
-# first preview, uncalibrated, is estimated at 176 ms at 960x540 and 291 ms at 1280x720
-# (measured 20-60 ms; 256 and 371 ms before the scene pass's refit, workers/cost.py) and
-# starts on the sharpest rung; at 1920x1080, 619 ms, it starts lower.
+# A first preview is far over the budget past this many budgets (485 ms at 1280x720, 333 at
+# 960x540, 182 at 640x360: preview_budget_ms): the default look's first preview,
+# uncalibrated, is estimated at 176 ms at 960x540 and 291 ms at 1280x720 (measured 20-60
+# ms; 256 and 371 ms before the scene pass's refit, workers/cost.py) and starts on the
+# sharpest rung; at 1920x1080, 619 ms, it starts lower.
 # The model's estimate is the least it is taken for here, calibrated or not: a session's
 # ratio is measured on its full frames, and one below 1 made 16 layers of every kind start
 # their drag at 960 px, 330 ms a frame.
@@ -316,6 +332,10 @@ class Session:
             return None
         return max(now, self.last_start + 1.0 / self.view.fps)
 
+    def preview_budget(self) -> float:
+        """The render budget of this session's previews, by its view's size (preview_budget_ms)."""
+        return preview_budget_ms(self.view.width, self.view.height)
+
     @property
     def preview_scale(self) -> float:
         return PREVIEW_RUNGS[self.preview_rung][0]
@@ -441,12 +461,12 @@ class Session:
         last = (self._estimate_ms(self._preview_still(old, self.preview_rung, now), held=False)
                 if old is not None else None)
         if (max(est / last, last / est) > PREVIEW_RECOST if last is not None
-                else max(self.cost_ratio, 1.0) * est > PREVIEW_FIRST_OVER * PREVIEW_BUDGET_MS):
+                else max(self.cost_ratio, 1.0) * est > PREVIEW_FIRST_OVER * self.preview_budget()):
             self.preview_costs.clear()
             self.level_ratios.clear()
             self.preview_rung = next(
                 (i for i in range(len(PREVIEW_RUNGS))
-                 if self.cost_ratio * self._estimate_ms(self._preview_still(fog, i, now)) <= PREVIEW_BUDGET_MS),
+                 if self.cost_ratio * self._estimate_ms(self._preview_still(fog, i, now)) <= self.preview_budget()),
                 len(PREVIEW_RUNGS) - 1)
         self.costed = (self.version, fog)
 
@@ -567,8 +587,8 @@ class Session:
     def measured(self, job: FrameJob, render_ms: float, now: float, once: bool = False,
                  scene_reused: bool | None = None) -> None:
         """A frame's render time. Previews climb PREVIEW_RUNGS by what they cost: a
-        preview over PREVIEW_BUDGET_MS makes the next one a rung lower; one well under
-        it (a fifth to spare) a rung higher, unless that rung was measured over the
+        preview over its budget (preview_budget) makes the next one a rung lower; one well
+        under it (a fifth to spare) a rung higher, unless that rung was measured over the
         budget within PREVIEW_COST_TTL_S. Costs are measured, not modelled: a frame's
         fixed costs (shadow map, sky, particles) do not shrink with its pixels, so a step
         down that did not pay (the rung above cost at most a quarter more) is taken back,
@@ -615,17 +635,18 @@ class Session:
         if job.rung != self.preview_rung:
             return   # a frame of an earlier rung: recorded, no step taken
         i = self.preview_rung
+        budget = self.preview_budget()
         fresh = lambda k: (c := self.preview_costs.get(k)) is not None and now - c[1] <= PREVIEW_COST_TTL_S  # noqa: E731
         if i > 0 and fresh(i - 1) and self.preview_costs[i - 1][0] <= 1.25 * ms:
             # the step down did not pay (the cost is fixed, not in the pixels): back up
             self.preview_rung = i - 1
-        elif ms > PREVIEW_BUDGET_MS and i + 1 < len(PREVIEW_RUNGS):
+        elif ms > budget and i + 1 < len(PREVIEW_RUNGS):
             # no step down that did not pay: a look whose cost is fixed (not in its
             # pixels) keeps its sharper preview
             if not (fresh(i + 1) and self.preview_costs[i + 1][0] > 0.8 * ms):
                 self.preview_rung = i + 1
-        elif ms < 0.8 * PREVIEW_BUDGET_MS and i > 0:
-            if not fresh(i - 1) or self.preview_costs[i - 1][0] <= PREVIEW_BUDGET_MS:
+        elif ms < 0.8 * budget and i > 0:
+            if not fresh(i - 1) or self.preview_costs[i - 1][0] <= budget:
                 self.preview_rung = i - 1
 
     def frame_done(self, job: FrameJob, sent: bool) -> None:

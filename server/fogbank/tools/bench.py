@@ -670,10 +670,11 @@ def targets_markdown(res: dict) -> list[str]:
             met = "yes" if (now >= want if how == ">=" else now <= want) else "no"
         wanted = "-" if want is None else f"{how} {want:g}{'x' if unit == 'x' else ' ' + unit}"
         L.append(f"| {label} | {fmt(was, unit)} | {fmt(now, unit)} | {wanted} | {met} |")
-    from fogbank.stream.session import PREVIEW_BUDGET_MS, PREVIEW_FPS
+    from fogbank.stream.session import PREVIEW_FPS, PREVIEW_FPS_SMALL, preview_budget_ms
     L += ["", f"Delivered frames while dragging are previews: the adaptive ladder sizes them to a "
-          f"{PREVIEW_BUDGET_MS:.1f} ms budget ({PREVIEW_FPS:g} fps less the JPEG, pipe and socket; "
-          "stream/session.py), so their width is part of the figure. Each delivered figure is the median "
+          f"budget by the view's size ({preview_budget_ms(1280, 720):.1f} ms at 1280x720, {PREVIEW_FPS:g} fps, "
+          f"and {preview_budget_ms(640, 360):.1f} ms at 640x360, {PREVIEW_FPS_SMALL:g} fps, less the JPEG, pipe "
+          "and socket; stream/session.py), so their width is part of the figure. Each delivered figure is the median "
           "of rounds, a server started for each (the round of median fps gives width and render time):", "",
           "| stream | fps | each round | frames px wide | server render ms |", "|---|---|---|---|---|"]
     for key, *_ in DELIVERED:

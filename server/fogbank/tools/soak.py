@@ -27,11 +27,13 @@ CHURN_LAYERS = [{"kind": "height"}, {"kind": "sphere"}, {"kind": "homogeneous", 
 
 
 def _churn(rng: random.Random) -> list[dict]:
-    """The messages of one churn step: a new look and a new view size."""
+    """The messages of one churn step: a new look (its sun too) and a new view size."""
     w, h = rng.choice(CHURN_SIZES)
     look = {"density": round(rng.uniform(0.5, 2.0), 3),
             "wind": {"speed": round(rng.uniform(0, 8), 2), "direction": round(rng.uniform(0, 360), 1)},
             "camera": {"yaw": round(rng.uniform(-60, 60), 2), "pitch": round(rng.uniform(-15, 5), 2)},
+            # a sun of its own: the worker's shadow maps by sun, and the previews' (render/resources.py)
+            "sun": {"azimuth": round(rng.uniform(0, 360), 1), "elevation": round(rng.uniform(5, 80), 1)},
             "layers": [rng.choice(CHURN_LAYERS) for _ in range(rng.randint(1, 3))]}
     return [{"type": "params", "params": look},
             {"type": "view", "width": w, "height": h, "fps": 30}]

@@ -1,0 +1,30 @@
+#!/bin/bash
+# A short GPU call (docs/bench-gpu.md, "A second call"): where a 720p stream frame goes
+# (scripts/frame_profile.py), the sun dragged at 960x540 on this checkout's server and on
+# BEFORE's (scripts/sun_drag.py), and, if GL_S is set, the GL tier on the NVIDIA driver.
+# Run from the repo root on a bare GPU machine with .gl/ and .whl/ as scripts/gpu_check.sh
+# describes, FOGBANK_THROWAWAY=1 (it unpacks GL loaders into /), OUT and BEFORE set.
+set -u
+[ "${FOGBANK_THROWAWAY:-}" = 1 ] && nvidia-smi -L >/dev/null 2>&1 || {
+  echo "gpu_profile.sh unpacks GL libraries into /: set FOGBANK_THROWAWAY=1 on a throwaway GPU machine"; exit 2; }
+[ -n "${OUT:-}" ] && [ -d "$OUT" ] || { echo "OUT must name an existing folder for the results"; exit 2; }
+export PYTHONUNBUFFERED=1
+T0=$(date +%s); stamp(){ echo "== $(( $(date +%s)-T0 )) s: $*"; }
+for f in .gl/*.deb; do dpkg -x "$f" /; done; ldconfig
+python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site .whl/*.whl || { echo "pip failed"; exit 3; }
+export PYTHONPATH=/tmp/site:$PWD/server
+export GLCONTEXT_LINUX_LIBGL=libOpenGL.so.0 GLCONTEXT_LINUX_LIBEGL=libEGL.so.1
+V=/usr/local/nvidia/share/glvnd/egl_vendor.d/10_nvidia.json
+[ -f $V ] && export __EGL_VENDOR_LIBRARY_FILENAMES=$V
+nvidia-smi --query-gpu=name,driver_version,clocks.sm --format=csv; nproc
+stamp "frame profile"
+timeout 90 python3 scripts/frame_profile.py > $OUT/profile.txt 2>&1; echo "rc $?"
+grep -E "^(held|orbit):|renderer|960x540" $OUT/profile.txt
+stamp "sun drag"
+REPS=${REPS:-2} timeout 150 python3 scripts/sun_drag.py ${BEFORE:-} 2>&1 | grep -vE "^\s*$" | tee $OUT/sun_drag.txt
+if [ -n "${GL_S:-}" ]; then
+  stamp "gl tier"
+  timeout $GL_S python3 -m pytest tests/gl -m gl -q -p no:cacheprovider --timeout 60 -o addopts="-ra" > $OUT/gl.log 2>&1
+  echo "gl rc $?"; grep -E "passed|failed|FAILED|ERROR" $OUT/gl.log | tail -25
+fi
+stamp done
