@@ -15,19 +15,7 @@
 # second ran with SKIP_PRESETS=1 BENCH_S=330 GL_S=100.
 # BENCH_S and GL_S bound the bench and the GL tests in seconds; SKIP_PRESETS=1 skips the stills.
 set -u
-[ "${FOGBANK_THROWAWAY:-}" = 1 ] && nvidia-smi -L >/dev/null 2>&1 || {
-  echo "gpu_check.sh unpacks GL libraries into /: set FOGBANK_THROWAWAY=1 on a throwaway GPU machine"; exit 2; }
-[ -n "${OUT:-}" ] && [ -d "$OUT" ] || { echo "OUT must name an existing folder for the results"; exit 2; }
-ls .gl/*.deb >/dev/null 2>&1 && ls .whl/*.whl >/dev/null 2>&1 || { echo "no .gl/*.deb or .whl/*.whl here"; exit 2; }
-export PYTHONUNBUFFERED=1
-T0=$(date +%s)
-stamp(){ echo "== $(( $(date +%s)-T0 )) s: $*"; }
-for f in .gl/*.deb; do dpkg -x "$f" /; done; ldconfig
-python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site .whl/*.whl || { echo "pip failed"; exit 3; }
-export PYTHONPATH=/tmp/site:$PWD/server
-export GLCONTEXT_LINUX_LIBGL=libOpenGL.so.0 GLCONTEXT_LINUX_LIBEGL=libEGL.so.1
-V=/usr/local/nvidia/share/glvnd/egl_vendor.d/10_nvidia.json
-[ -f $V ] && export __EGL_VENDOR_LIBRARY_FILENAMES=$V
+source scripts/gpu_env.sh
 { nvidia-smi -L; nvidia-smi --query-gpu=name,driver_version,clocks.sm,clocks.mem --format=csv; nproc; python3 --version;
   python3 -c "import numpy, PIL; print('numpy', numpy.__version__, 'pillow', PIL.__version__)"; } 2>&1 | tee $OUT/info.txt
 stamp probe

@@ -1,21 +1,11 @@
 #!/bin/bash
-# A short GPU call (docs/bench-gpu.md, "A second call"): where a 720p stream frame goes
+# A short GPU call (docs/bench-gpu.md, "A later session's calls"): where a 720p stream frame goes
 # (scripts/frame_profile.py), the sun dragged at 960x540 on this checkout's server and on
 # BEFORE's (scripts/sun_drag.py), and, if GL_S is set, the GL tier on the NVIDIA driver.
 # Run from the repo root on a bare GPU machine with .gl/ and .whl/ as scripts/gpu_check.sh
 # describes, FOGBANK_THROWAWAY=1 (it unpacks GL loaders into /), OUT and BEFORE set.
 set -u
-[ "${FOGBANK_THROWAWAY:-}" = 1 ] && nvidia-smi -L >/dev/null 2>&1 || {
-  echo "gpu_profile.sh unpacks GL libraries into /: set FOGBANK_THROWAWAY=1 on a throwaway GPU machine"; exit 2; }
-[ -n "${OUT:-}" ] && [ -d "$OUT" ] || { echo "OUT must name an existing folder for the results"; exit 2; }
-export PYTHONUNBUFFERED=1
-T0=$(date +%s); stamp(){ echo "== $(( $(date +%s)-T0 )) s: $*"; }
-for f in .gl/*.deb; do dpkg -x "$f" /; done; ldconfig
-python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site .whl/*.whl || { echo "pip failed"; exit 3; }
-export PYTHONPATH=/tmp/site:$PWD/server
-export GLCONTEXT_LINUX_LIBGL=libOpenGL.so.0 GLCONTEXT_LINUX_LIBEGL=libEGL.so.1
-V=/usr/local/nvidia/share/glvnd/egl_vendor.d/10_nvidia.json
-[ -f $V ] && export __EGL_VENDOR_LIBRARY_FILENAMES=$V
+source scripts/gpu_env.sh
 nvidia-smi --query-gpu=name,driver_version,clocks.sm --format=csv; nproc
 stamp "frame profile"
 timeout 90 python3 scripts/frame_profile.py > $OUT/profile.txt 2>&1; echo "rc $?"
