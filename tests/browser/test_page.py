@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from pages import (PANEL, canvas_pixels, drag_view, new_page, panel_and_state, wait_frames,
+from pages import (PANEL, canvas_pixels, drag_view, new_page, panel_and_state, shown_version, wait_frames,
                    wait_full_frame_of_current_version, wait_quiet, _at, _read, _shown)
 from servers import Server
 
@@ -65,11 +65,11 @@ def test_density_control_changes_picture_and_url(server, browser):
     page = new_page(browser, server.url + "/?v=1&time=4&play=0")
     wait_frames(page, 1)
     wait_full_frame_of_current_version(page)
-    before = canvas_pixels(page)
+    before, v0 = canvas_pixels(page), shown_version(page)
     page.locator("[data-path='density']").fill("3")
     page.locator("[data-path='density']").press("Enter")
     page.wait_for_function("location.search.includes('density=3')")
-    wait_full_frame_of_current_version(page)
+    wait_full_frame_of_current_version(page, newer_than=v0)
     after = canvas_pixels(page)
     assert np.abs(after - before).mean() > 4
     assert page.errors == []
@@ -104,12 +104,12 @@ def test_dragging_the_view_moves_the_camera(server, browser):
     page = new_page(browser, server.url + "/?v=1&time=3&play=0")
     wait_frames(page, 1)
     wait_full_frame_of_current_version(page)
-    before = canvas_pixels(page)
+    before, v0 = canvas_pixels(page), shown_version(page)
     drag_view(page, -12, 2)
     page.wait_for_function("location.search.includes('camera.yaw=')")
     yaw = float(page.evaluate("new URLSearchParams(location.search).get('camera.yaw')"))
     assert yaw != 5.0
-    wait_full_frame_of_current_version(page)
+    wait_full_frame_of_current_version(page, newer_than=v0)
     assert np.abs(canvas_pixels(page) - before).mean() > 3
     # the keyboard flies too
     page.locator("#view").focus()
