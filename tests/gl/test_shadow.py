@@ -172,22 +172,24 @@ def test_a_previews_map_is_drawn_for_a_sun_the_full_map_is_not_and_shows_its_sha
 
 
 def test_a_full_frame_never_reuses_a_scene_pass_lit_by_the_previews_map(renderer):
-    """A preview's scene pass lit by the preview map is held for the next previews, never
-    for a full frame at its size, with MSAA or without: that frame's pixels are those of a
-    slot that never drew a preview. A preview after the full map is drawn for its sun is
-    lit by it: the full frame's pixels."""
+    """A preview's scene pass (lit by the preview map here) is held for the next previews,
+    never for a full frame at its size, with MSAA or without: that frame's pixels are those
+    of a slot that never drew a preview. A preview after the full map is drawn for its sun
+    is lit by it: the full frame's pixels."""
     still = _look(sun={**LOW_SUN, "azimuth": 75.0})
-    renderer.shadows.clear()
-    renderer.render(still, slot="test-draft-a", msaa=False, draft=True)
-    again = renderer.render(still.model_copy(update={"time": still.time + 1.0}), slot="test-draft-a",
-                            msaa=False, draft=True)
-    assert renderer.caches.gbuffer("test-draft-a", still.width, still.height, True).scene_key[4] is True
-    full = renderer.render(still, slot="test-draft-a", msaa=False)
-    fresh = renderer.render(still, slot="test-draft-b", msaa=False)
-    assert np.array_equal(full, fresh) is True
-    assert np.array_equal(again, fresh) is False
+    for msaa, slot in ((False, "test-draft-a"), (True, "test-draft-m")):
+        g = renderer.caches.gbuffer(slot, still.width, still.height, True)
+        renderer.shadows.clear()
+        first = renderer.render(still, slot=slot, msaa=False, draft=True)
+        renderer.render(still.model_copy(update={"time": still.time + 1.0}), slot=slot, msaa=False, draft=True)
+        assert g.scene_key[4] is True
+        full = renderer.render(still, slot=slot, msaa=msaa)
+        fresh = renderer.render(still, slot=slot + "-fresh", msaa=msaa)
+        assert np.array_equal(full, fresh) is True
+        if not msaa:
+            assert np.array_equal(first, fresh) is False   # the same frame, lit by the preview map
     preview = renderer.render(still, slot="test-draft-c", msaa=False, draft=True)
-    assert np.array_equal(preview, fresh) is True
+    assert np.array_equal(preview, renderer.render(still, slot="test-draft-a-fresh", msaa=False)) is True
 
 
 def test_the_worker_keeps_a_full_map_for_each_of_a_few_suns(renderer):
@@ -202,7 +204,7 @@ def test_the_worker_keeps_a_full_map_for_each_of_a_few_suns(renderer):
     suns = [base.model_copy(update={"sun": base.sun.model_copy(update={"azimuth": 60.0 + 30.0 * i})})
             for i in range(SHADOW_MAPS + 1)]
     renderer.shadows.clear()
-    drawn = renderer.shadows.drawn
+    drawn, new = renderer.shadows.drawn, renderer.shadows.new_suns
     first = [renderer.render(s, slot=f"test-suns-{i}", msaa=False) for i, s in enumerate(suns[:SHADOW_MAPS])]
     again = [renderer.render(s, slot=f"test-suns-{i}", msaa=False) for i, s in enumerate(suns[:SHADOW_MAPS])]
     assert renderer.shadows.drawn - drawn == SHADOW_MAPS
@@ -212,3 +214,22 @@ def test_the_worker_keeps_a_full_map_for_each_of_a_few_suns(renderer):
     back = renderer.render(suns[0], slot="test-suns-0", msaa=False)
     assert renderer.shadows.drawn - drawn == SHADOW_MAPS + 2
     assert np.array_equal(back, first[0]) is True
+    # a sun drawn lately and drawn again (maps evicting each other) is the looks' own cost,
+    # not work done once for a new sun (workers/worker.py `once`)
+    assert renderer.shadows.new_suns - new == SHADOW_MAPS + 1
+
+
+def test_a_previews_light_shafts_sample_the_previews_map_as_the_full_one(renderer):
+    """Light shafts sample the frame's shadow map along each view ray (passes/fog.frag,
+    the depth bias scaled as the scene pass's): a preview lit by the preview map shows
+    the full frame's shafts but for a level here and there, with the sun low or high."""
+    for elevation in (12.0, 35.0):
+        still = _look(effects={**P.preset_dict("default")["effects"], "shafts": 1.0}, density=0.8,
+                      sun={**LOW_SUN, "elevation": elevation})
+        full = renderer.render(still, slot="test-shafts-full", msaa=False)
+        renderer.shadows.clear()
+        draft = renderer.render(still, slot="test-shafts-draft", msaa=False, draft=True)
+        assert renderer.shadows.draft.key == (still.scene, still.sun.azimuth, elevation)
+        px = np.abs(full.astype(int) - draft.astype(int)).max(axis=2)
+        assert float(px.mean()) < 0.5
+        assert float(np.percentile(px, 99)) <= 2

@@ -212,7 +212,7 @@ def test_a_look_made_costly_in_one_step_starts_its_previews_where_its_estimate_f
     share, detail = PREVIEW_RUNGS[job.rung]
     assert (job.still.width, job.still.height) == (240, 136) and share == 0.25
     assert detail < 1.0 and {l.samples for l in job.still.layers} == {max(1, -(-128 * detail // 1))}
-    fits = 0.5 * estimate(job.still, msaa=False, compiled=True).seconds * 1000 <= PREVIEW_BUDGET_MS
+    fits = 0.5 * estimate(job.still, msaa=False, compiled=True).seconds * 1000 <= preview_budget_ms(960, 540)
     assert fits or job.rung == len(PREVIEW_RUNGS) - 1
     s.frame_done(job, sent=True)
     s.apply(msg(f'{{"type": "ack", "frame": {job.frame}}}'), t + 0.1)

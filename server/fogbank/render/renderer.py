@@ -63,9 +63,10 @@ class Renderer:
         view = cam.view(still.camera, w, h)
         g = self.caches.gbuffer(slot, w, h, still.effects.sun_through_fog)
         coarse = draft and self.shadows.get(sun_key(still)) is None
-        key = (still.scene, still.camera, still.sun, msaa, coarse)
-        # a preview happily reuses a full-quality scene pass, and one lit by the preview
-        # shadow map; a frame without MSAA, one with it; never the other way round
+        key = (still.scene, still.camera, still.sun, msaa, draft)
+        # a preview happily reuses a full-quality scene pass, and another preview's (which
+        # may be lit by the preview shadow map); a frame without MSAA, one with it; never
+        # the other way round (stream/session.py _scene_cached takes it the same way)
         old = g.scene_key
         cached = (old is not None and old[:3] == key[:3] and (old[3] or not msaa) and (draft or not old[4]))
         g.last_frame = "reused" if cached else ("new" if g.scene_key is None else "redrawn")

@@ -18,7 +18,7 @@ SHADOW_SIZE = 2048
 # drags: this many texels a side (0.92 m, against the full map's 0.23), from the terrain
 # at this level of detail everywhere (meshes.LOD_STRIDES: 4 grid cells a side). Drawing
 # the full map and baking its lightmap took 134-139 ms here whatever the frame's size,
-# so every preview of a sun dragged took at least 150 ms; this one takes about 15.
+# so every preview of a sun dragged took at least 150 ms; this one takes about 14.
 DRAFT_SHADOW_SIZE = 512
 DRAFT_SHADOW_LEVEL = 2
 # Its depth bias, as a multiple of the full map's (scene/sun_visibility.glsl). Measured
@@ -31,6 +31,10 @@ DRAFT_SHADOW_BIAS = 3.0
 # and every frame for light shafts. With one map, two streams with shafts and different
 # suns redrew it at every frame: 169 ms a frame at 960x540 against 17.
 SHADOW_MAPS = 3
+# A full map drawn for a sun among the last this many drawn is not work done once for a
+# new sun (ShadowMaps.drew): more suns than SHADOW_MAPS in turn evict each other's maps, and
+# the redraws are then what those looks cost a frame.
+SUNS_SEEN = 4 * SHADOW_MAPS
 NOISE_TILES = 4   # baked tiles kept per worker
 
 
@@ -138,13 +142,15 @@ class ShadowMap:
 class ShadowMaps:
     """The worker's full shadow maps by the (scene, sun) each was drawn for, the least
     recently used let go past `keep` (SHADOW_MAPS), and the preview map (DRAFT_SHADOW_SIZE).
-    `drawn` counts the full maps drawn: a frame that drew one paid once for its sun."""
+    `drawn` counts the full maps drawn, `new_suns` those drawn for a sun not among the last
+    SUNS_SEEN drawn: a frame that drew one paid once for its sun (workers/worker.py)."""
 
     def __init__(self, ctx, keep: int = SHADOW_MAPS):
         self.ctx, self.keep = ctx, keep
         self._maps: OrderedDict[tuple, ShadowMap] = OrderedDict()
         self.draft = ShadowMap(ctx, DRAFT_SHADOW_SIZE, DRAFT_SHADOW_LEVEL, DRAFT_SHADOW_BIAS)
-        self.drawn = 0
+        self.drawn = self.new_suns = 0
+        self._suns: OrderedDict[tuple, None] = OrderedDict()   # the suns drawn lately, newest last
 
     def get(self, key: tuple) -> ShadowMap | None:
         """The full map drawn for `key`, if kept."""
@@ -162,11 +168,24 @@ class ShadowMaps:
         self._maps[key] = sm
         return sm
 
+    def drew(self, key: tuple) -> None:
+        """A full map was drawn for `key` (the shadow pass)."""
+        self.drawn += 1
+        if key not in self._suns:
+            self.new_suns += 1
+        self._suns[key] = None
+        self._suns.move_to_end(key)
+        while len(self._suns) > SUNS_SEEN:
+            self._suns.popitem(last=False)
+
     def clear(self) -> None:
-        """Let every full map go (a worker over its memory budget); the preview map stays."""
+        """Let every full map go (a worker over its memory budget: the next frame that needs
+        one draws it again, 134-139 ms here), and forget the suns seen; the preview map
+        stays."""
         for sm in self._maps.values():
             sm.release()
         self._maps.clear()
+        self._suns.clear()
 
 
 class NoiseTiles:

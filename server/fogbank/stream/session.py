@@ -34,7 +34,7 @@ PREVIEW_QUALITY = 60      # JPEG quality while the user drags
 # the socket; PREVIEW_AFTER_MS, measured here with `fogbank bench` at 1280x720 and at
 # 640x360 alike). The frame rate is issue 13's for the view's size: PREVIEW_FPS at
 # 1280x720 and larger, PREVIEW_FPS_SMALL at 640x360 and smaller, geometric in the view's
-# pixels between (32 fps at 960x540). At 60 ms, 720p previews were 640 px wide at 15-17
+# pixels between (32.5 fps at 960x540). At 60 ms, 720p previews were 640 px wide at 15-17
 # fps. With 24 fps at every size, a 640x360 drag's previews were 320 px wide in some
 # rounds of the benchmark (12-14 ms, 48-54 fps delivered) and 480 px in others (20-29 ms,
 # 29-43 fps).
@@ -63,7 +63,7 @@ PREVIEW_COST_TTL_S = 2.0   # a rung's measured cost is trusted this long (the lo
 # made costly in one step (16 layers of volume noise) would otherwise spend seconds on
 # frames at the old size before the ladder came down.
 PREVIEW_RECOST = 1.5
-# A first preview is far over the budget past this many budgets (485 ms at 1280x720, 333 at
+# A first preview is far over the budget past this many budgets (485 ms at 1280x720, 332 at
 # 960x540, 182 at 640x360: preview_budget_ms): the default look's first preview,
 # uncalibrated, is estimated at 176 ms at 960x540 and 291 ms at 1280x720 (measured 20-60
 # ms; 256 and 371 ms before the scene pass's refit, workers/cost.py) and starts on the

@@ -188,7 +188,7 @@ def frame(still, slot: str, msaa: bool, quality: int, show: str = "shaded", laye
     def fn(r):
         t0 = time.perf_counter()
         stats, reused = None, None
-        work = (r.programs.compiled, r.noise.baked, r.shadows.drawn)
+        work = (r.programs.compiled, r.noise.baked, r.shadows.new_suns)
         if show == "shaded":
             img = r.render(still, slot=slot, msaa=msaa, hold_fog=hold_fog, draft=draft)
             reused = r.scene_reused
@@ -199,9 +199,10 @@ def frame(still, slot: str, msaa: bool, quality: int, show: str = "shaded", laye
         return {"data": data, "render_ms": (t1 - t0) * 1000.0, "stats": stats,
                 "encode_ms": (time.perf_counter() - t1) * 1000.0,
                 # it compiled a program, baked a noise tile or drew the full shadow map for a
-                # new sun: work done once, not the look's cost (a dragged sun's previews
-                # draw the preview map, which is their cost)
-                "once": (r.programs.compiled, r.noise.baked, r.shadows.drawn) != work,
+                # sun new to the worker: work done once, not the look's cost (a dragged sun's
+                # previews draw the preview map, which is their cost, as are the redraws of
+                # suns whose maps evict each other: resources.SUNS_SEEN)
+                "once": (r.programs.compiled, r.noise.baked, r.shadows.new_suns) != work,
                 # whether it drew over the cached scene pass (None: a view that teaches)
                 "scene_reused": reused}
     return _run(fn)

@@ -130,7 +130,8 @@ class FogPass(Pass):
             _, half = r.meshes.get(f.still.scene).bounds
             # the shadow map spans the scene's bounds (2 half); beyond, nothing is shadowed
             set_uniforms(prog, {"uSunViewProj": f.sun_view_proj, "uEye": v.eye,
-                                "uShaftLength": min(e.sky_distance, 2.0 * half)})
+                                "uShaftLength": min(e.sky_distance, 2.0 * half),
+                                "uShadowBiasScale": f.shadow.bias_scale})
             f.shadow.nearest.use(TEX["uShadow"])
         f.gbuffer.invdist.use(TEX["uInvDist"])
         r.programs.draw(prog, moderngl.TRIANGLES)

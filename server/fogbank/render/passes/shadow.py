@@ -63,4 +63,4 @@ class ShadowPass(Pass):
             sm.lightmap.filter = (moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR)
         sm.key = key
         if sm is not r.shadows.draft:
-            r.shadows.drawn += 1
+            r.shadows.drew(key)

@@ -47,6 +47,7 @@ uniform sampler2DShadow uShadow;  // the sun's depth map (compare: 1 = lit)
 uniform mat4 uSunViewProj;        // world -> the sun's clip space
 uniform vec3 uEye;                // m, world (the shadow map is in world space)
 uniform float uShaftLength;       // m: the view ray is sampled this far at most
+uniform float uShadowBiasScale;   // times the full map's bias (render/resources.py ShadowMap.bias_scale)
 
 // Light shafts, SAMPLED (not a closed form): the share of SHAFTS samples along the view
 // ray's first uShaftLength metres that the sun lights, each sample's place jittered by the
@@ -64,9 +65,10 @@ float litShare(vec3 w, float d, vec2 px) {
     for (int i = 0; i < SHAFTS; ++i) {
         vec3 q = mix(q0, q1, (float(i) + j) / float(SHAFTS));
         // outside the map nothing casts a shadow; 0.0015 of depth keeps a sample on a lit
-        // surface from shadowing itself (as the scene pass's bias)
+        // surface from shadowing itself (as the scene pass's bias, and as it scaled for a
+        // preview's coarser map: uShadowBiasScale)
         bool inside = all(greaterThanEqual(q, vec3(0.0))) && all(lessThanEqual(q, vec3(1.0)));
-        lit += inside ? texture(uShadow, vec3(q.xy, q.z - 0.0015)) : 1.0;
+        lit += inside ? texture(uShadow, vec3(q.xy, q.z - 0.0015 * uShadowBiasScale)) : 1.0;
     }
     return lit / float(SHAFTS);
 }
