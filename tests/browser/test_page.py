@@ -109,6 +109,9 @@ def test_dragging_the_view_moves_the_camera(server, browser):
     page.wait_for_function("location.search.includes('camera.yaw=')")
     yaw = float(page.evaluate("new URLSearchParams(location.search).get('camera.yaw')"))
     assert yaw != 5.0
+    # the page sends the drag's last camera once the server took the one before: until it
+    # is quiet, a full frame of a confirmed version can still give way to a preview
+    wait_quiet(page)
     wait_full_frame_of_current_version(page, newer_than=v0)
     assert np.abs(canvas_pixels(page) - before).mean() > 3
     # the keyboard flies too
