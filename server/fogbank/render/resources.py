@@ -61,12 +61,12 @@ class SceneMesh:
     draft_shadow: list[tuple[moderngl.VertexArray, int]] | None = None
     draft_bake: tuple[moderngl.VertexArray, int] | None = None
 
-    def casters(self, level: int) -> tuple[list[tuple[moderngl.VertexArray, int]], tuple | None]:
-        """What a shadow map drawn at `level` (0, or DRAFT_SHADOW_LEVEL) draws: its
+    def casters(self, draft: bool) -> tuple[list[tuple[moderngl.VertexArray, int]], tuple | None]:
+        """What the full shadow map (or, `draft`, the preview one) is drawn from: its
         casters, and the terrain its lightmap bakes (None: a scene without terrain)."""
-        if level == 0:
-            return self.shadow, (self.terrain_bake, self.full_detail) if self.terrain_bake is not None else None
-        return self.draft_shadow, self.draft_bake
+        if draft:
+            return self.draft_shadow, self.draft_bake
+        return self.shadow, (self.terrain_bake, self.full_detail) if self.terrain_bake is not None else None
 
 
 class Meshes:
@@ -113,12 +113,11 @@ class ShadowMap:
     """The sun's depth map (bilinear PCF per tap) and the (scene, sun) it was drawn for;
     with it the terrain's lightmap: its sun visibility baked from above over the map's
     square (passes/lightmap.frag), mipmapped, and that square (x0, z0, 1/side). `size`
-    texels a side for both (2048: 0.23 m), drawn from the terrain at `level` of detail
-    (scene/meshes.py LOD_STRIDES; 0 the full grid), compared with `bias` times the full
-    map's depth bias."""
+    texels a side for both (2048: 0.23 m), compared with `bias` times the full map's depth
+    bias. What it is drawn from is the mesh's (SceneMesh.casters)."""
 
-    def __init__(self, ctx, size: int = SHADOW_SIZE, level: int = 0, bias: float = 1.0):
-        self.size, self.level, self.bias_scale = size, level, bias
+    def __init__(self, ctx, size: int = SHADOW_SIZE, bias: float = 1.0):
+        self.size, self.bias_scale = size, bias
         self.lightmap = ctx.texture((size, size), 1, dtype="f1")
         self.lightmap.repeat_x = self.lightmap.repeat_y = False
         self.lightmap_fbo = ctx.framebuffer(color_attachments=[self.lightmap])
@@ -148,7 +147,7 @@ class ShadowMaps:
     def __init__(self, ctx, keep: int = SHADOW_MAPS):
         self.ctx, self.keep = ctx, keep
         self._maps: OrderedDict[tuple, ShadowMap] = OrderedDict()
-        self.draft = ShadowMap(ctx, DRAFT_SHADOW_SIZE, DRAFT_SHADOW_LEVEL, DRAFT_SHADOW_BIAS)
+        self.draft = ShadowMap(ctx, DRAFT_SHADOW_SIZE, DRAFT_SHADOW_BIAS)
         self.drawn = self.new_suns = 0
         self._suns: OrderedDict[tuple, None] = OrderedDict()   # the suns drawn lately, newest last
 

@@ -140,9 +140,10 @@ async def drag_latency(url: str, look: dict, width: int, height: int, changes: i
     frames awaited: the first (first_ms: a new fog program compiles on its first draw) and
     the refined one after input stops (refined_ms), `settle_s` at most, as a user looks at
     a look before changing it. Then `interact` on and a change (`change(i)`, a params
-    patch: the global density by default) every `every_s` while time runs. The latency of each change is the time to the first frame
-    whose params version shows it (a later change's frame counts for it too: the page shows
-    the newest look). Also the previews' median width and the frames' render ms."""
+    patch: the global density by default) every `every_s` while time runs. The latency of
+    each change is the time to the first frame whose params version shows it (a later
+    change's frame counts for it too: the page shows the newest look). Also the previews'
+    median width and the frames' render ms."""
     from fogbank.stream.protocol import FLAG_FULL
     ws = await _session(url, "v=1", width, height, 120)
     lat: list[float] = []

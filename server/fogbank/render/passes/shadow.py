@@ -44,7 +44,7 @@ class ShadowPass(Pass):
         r.ctx.enable(moderngl.DEPTH_TEST)
         r.ctx.disable(moderngl.CULL_FACE)
         set_uniform(r.shadow_prog, "uSunViewProj", f.sun_view_proj)
-        casters, terrain = mesh.casters(sm.level)
+        casters, terrain = mesh.casters(f.coarse_shadow)
         for shadow_vao, count in casters:   # the terrain at the map's level of detail, and the objects
             shadow_vao.render(moderngl.TRIANGLES, vertices=count)
         # the lightmap's square: the shadow map's cube's, in x and z
@@ -62,5 +62,5 @@ class ShadowPass(Pass):
             sm.lightmap.build_mipmaps()
             sm.lightmap.filter = (moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR)
         sm.key = key
-        if sm is not r.shadows.draft:
+        if not f.coarse_shadow:
             r.shadows.drew(key)
