@@ -17,6 +17,9 @@ TILE_LIST_WIDTH = 256   # texels a row of GBuffer.tile_list
 SILHOUETTE_TILE = 4   # px: the composite redoes pixels with two surfaces by tiles of this size
 # bytes per pixel of each GPU allocation (for the caches' byte budgets and the cost model)
 OUT_BPP = 4                                   # RGBA8 output renderbuffer
+# the output's readback (host memory, Targets.readback): as GL gives it (bottom row first)
+# and top row first, 3 bytes a pixel each
+READBACK_BPP = 2 * 3
 MSAA_BPP = MSAA_SAMPLES * (8 + 4 + 4)         # RGBA16F + R32F + depth24/stencil8, per sample
 LINEAR_BPP = 2 * 8                            # two RGBA16F blur targets
 # near surface: RGBA16F colour, R32F inverse distance, depth; far surface (two-surface
@@ -43,10 +46,26 @@ class Targets:
     msaa_fbos: dict[bool, moderngl.Framebuffer] = field(default_factory=dict)   # by sunlight
     fog: dict[tuple[int, int], tuple[moderngl.Framebuffer, moderngl.Texture]] = field(default_factory=dict)
     linear: list[tuple[moderngl.Framebuffer, moderngl.Texture]] = field(default_factory=list)
+    _readback: tuple[bytearray, np.ndarray] | None = None
+
+    def readback(self) -> tuple[bytearray, np.ndarray]:
+        """The output's readback buffers, made on first use and kept with the targets:
+        (the bytes as GL reads them, bottom row first; the (height, width, 3) image, top row
+        first). A frame reads into memory that is already mapped: with the worker's fixed
+        mmap threshold (workers/worker.py) every fresh 2.7 MB buffer of a 1280x720 frame was
+        a new mapping whose pages faulted in as they were written, twice a frame (the read,
+        and the copy that made the flipped image contiguous for the JPEG encoder): 1.7 ms
+        of its 3.6 ms encode."""
+        if self._readback is None:
+            w, h = self.size
+            self._readback = (bytearray(w * h * 3), np.empty((h, w, 3), np.uint8))
+        return self._readback
 
     def nbytes(self) -> int:
         w, h = self.size
         n = w * h * OUT_BPP
+        if self._readback is not None:
+            n += w * h * READBACK_BPP
         for sun in self.msaa_fbos:
             n += w * h * (MSAA_BPP + (MSAA_SAMPLES * SUNLIGHT_BPP if sun else 0))
         for scale, _ in self.fog:
@@ -61,6 +80,7 @@ class Targets:
         self.fog.clear()
         self.linear.clear()
         self.msaa_fbos.clear()
+        self._readback = None
 
     def msaa(self, sunlight: bool = False) -> moderngl.Framebuffer:
         """Colour (RGBA16F), inverse distance (R32F), with `sunlight` the direct sunlight

@@ -190,7 +190,7 @@ def frame(still, slot: str, msaa: bool, quality: int, show: str = "shaded", laye
         stats, reused = None, None
         work = (r.programs.compiled, r.noise.baked, r.shadows.new_suns)
         if show == "shaded":
-            img = r.render(still, slot=slot, msaa=msaa, hold_fog=hold_fog, draft=draft)
+            img = r.render(still, slot=slot, msaa=msaa, hold_fog=hold_fog, draft=draft, lend=True)
             reused = r.scene_reused
         else:
             img, stats = teach.render(r, still, show, layer, slot=slot)
@@ -214,7 +214,7 @@ def still(still, fmt: str) -> dict[str, Any]:
 
     def fn(r):
         t0 = time.perf_counter()
-        img = r.render(still)
+        img = r.render(still, lend=True)
         t1 = time.perf_counter()
         data = encode(img, fmt)
         return {"data": data, "render_ms": (t1 - t0) * 1000.0,

@@ -1,4 +1,6 @@
-"""Readback: the output target as (height, width, 3) uint8 sRGB, top row first."""
+"""Readback: the output target as (height, width, 3) uint8 sRGB, top row first, into the
+frame size's kept buffer (render/targets.py Targets.readback): the frame's image is valid
+until the next frame of that size (Renderer.render copies it unless told to lend it)."""
 
 from __future__ import annotations
 
@@ -14,5 +16,7 @@ class OutputPass(Pass):
 
     def run(self, r, f) -> None:
         w, h = f.targets.size
-        raw = f.targets.out.read(components=3, alignment=1)
-        f.image = np.frombuffer(raw, np.uint8).reshape(h, w, 3)[::-1]
+        raw, image = f.targets.readback()
+        f.targets.out.read_into(raw, components=3, alignment=1)
+        np.copyto(image, np.frombuffer(raw, np.uint8).reshape(h, w, 3)[::-1])
+        f.image = image

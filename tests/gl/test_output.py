@@ -1,0 +1,97 @@
+"""The readback (render/passes/output.py): the frame's image is the output target's pixels
+top row first, read into its size's kept buffer (render/targets.py Targets.readback);
+Renderer.render hands the caller a copy unless told to lend the buffer; the buffer counts
+against the caches' budget and goes with its targets; and a worker's frame, with the
+worker's fixed mmap threshold, maps no new memory."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+
+from fogbank.model.params import StillParams
+from fogbank.model.presets import preset_dict
+from fogbank.render.passes import FRAME_PASSES
+from fogbank.render.targets import READBACK_BPP
+
+
+def _look(w: int, h: int, density: float = 1.0) -> StillParams:
+    return StillParams.model_validate({**preset_dict("default"), "width": w, "height": h, "density": density})
+
+
+def test_the_image_is_the_output_target_top_row_first(renderer):
+    w, h = 203, 117
+    f = renderer.begin(_look(w, h), "output-test", True)
+    for p in FRAME_PASSES:
+        p.run(renderer, f)
+    # an independent read of the same target: GL's rows are bottom first
+    raw = np.frombuffer(f.targets.out.read(components=3, alignment=1), np.uint8).reshape(h, w, 3)
+    assert f.image.shape == (h, w, 3)
+    assert f.image.flags["C_CONTIGUOUS"]
+    assert np.array_equal(f.image, raw[::-1])
+    assert np.array_equal(f.image[0], raw[h - 1])
+    renderer.keep_only(f)
+    renderer.drop_slot("output-test")
+
+
+def test_render_returns_a_copy_the_caller_owns_unless_lent(renderer):
+    w, h = 160, 90
+    a = renderer.render(_look(w, h, 1.0), slot="output-test")
+    kept = a.copy()
+    b = renderer.render(_look(w, h, 4.0), slot="output-test")
+    assert not np.array_equal(a, b)          # the two looks differ
+    assert np.array_equal(a, kept)           # and the first image was not overwritten
+    assert not np.shares_memory(a, b)
+    lent1 = renderer.render(_look(w, h, 1.0), slot="output-test", lend=True)
+    lent2 = renderer.render(_look(w, h, 4.0), slot="output-test", lend=True)
+    assert np.shares_memory(lent1, lent2)    # one buffer a size, overwritten by the next frame
+    assert np.array_equal(lent2, b)
+    assert np.array_equal(kept, a)
+    renderer.drop_slot("output-test")
+
+
+def test_the_readback_counts_against_the_budget_and_goes_with_its_targets(renderer):
+    from fogbank.render.renderer import Renderer
+    r = Renderer(renderer.ctx, cache_bytes=64 << 20)
+    w, h = 96, 54
+    t = r.caches.targets(w, h)
+    before = t.nbytes()
+    r.render(_look(w, h), slot="output-test")
+    t = r.caches.targets(w, h)
+    raw, image = t.readback()
+    assert len(raw) == w * h * 3 and image.shape == (h, w, 3)
+    assert t.nbytes() - before >= w * h * READBACK_BPP
+    r.release_caches()   # the targets go, their readback with them
+    assert t._readback is None
+    assert t.nbytes() == w * h * 4    # the output renderbuffer's size is all it counts then
+
+
+_WORKER_FRAMES = """
+import json, resource
+from fogbank.workers import worker
+worker.init("auto", None, 0, 512 << 20, 0)
+from fogbank.model.params import StillParams
+from fogbank.model.presets import preset_dict
+look = StillParams.model_validate({**preset_dict("default"), "width": 1280, "height": 720})
+frame = lambda i: worker.frame(look.model_copy(update={"time": 2.0 + i / 30}), "s", True, 80, hold_fog=True)
+for i in range(5):
+    frame(i)
+r0 = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+for i in range(10):
+    frame(10 + i)
+print(json.dumps({"faults": (resource.getrusage(resource.RUSAGE_SELF).ru_minflt - r0) / 10}))
+"""
+
+
+def test_a_worker_frame_maps_no_new_memory():
+    """A worker process (its own mmap threshold, workers/worker.py) drawing 1280x720
+    stream frames: the page faults a frame, against the 675 pages (4 KiB) one fresh
+    readback buffer would take. Before the kept buffer there were 1352 a frame: the read
+    and the contiguous copy for the encoder, each a new mapping (3.6 ms of system time)."""
+    out = subprocess.run([sys.executable, "-c", _WORKER_FRAMES], capture_output=True, text=True, timeout=240)
+    assert out.returncode == 0, out.stderr[-2000:]
+    faults = json.loads(out.stdout.strip().splitlines()[-1])["faults"]
+    assert faults < 100
