@@ -46,7 +46,7 @@ class Targets:
     msaa_fbos: dict[bool, moderngl.Framebuffer] = field(default_factory=dict)   # by sunlight
     fog: dict[tuple[int, int], tuple[moderngl.Framebuffer, moderngl.Texture]] = field(default_factory=dict)
     linear: list[tuple[moderngl.Framebuffer, moderngl.Texture]] = field(default_factory=list)
-    _readback: tuple[bytearray, np.ndarray] | None = None
+    _readback: tuple[bytearray, np.ndarray] | None = field(default=None, repr=False, compare=False)
 
     def readback(self) -> tuple[bytearray, np.ndarray]:
         """The output's readback buffers, made on first use and kept with the targets:
@@ -60,6 +60,15 @@ class Targets:
             w, h = self.size
             self._readback = (bytearray(w * h * 3), np.empty((h, w, 3), np.uint8))
         return self._readback
+
+    def read_image(self) -> np.ndarray:
+        """The output target as (height, width, 3) uint8, top row first, in the kept image
+        (overwritten by the next read of this size)."""
+        w, h = self.size
+        raw, image = self.readback()
+        self.out.read_into(raw, components=3, alignment=1)
+        np.copyto(image, np.frombuffer(raw, np.uint8).reshape(h, w, 3)[::-1])
+        return image
 
     def nbytes(self) -> int:
         w, h = self.size

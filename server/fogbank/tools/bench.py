@@ -158,7 +158,7 @@ def biri_table1(r: Renderer, repeat: int = 5) -> list[dict]:
                 s = still.model_copy(update={"camera": still.camera.model_copy(
                     update={"yaw": still.camera.yaw + 0.01 * (i + 1)})})
                 t0 = time.perf_counter()
-                r.render(s)
+                r.render(s, lend=True)
                 return time.perf_counter() - t0
             fps = 1.0 / _median(frame, repeat)
             size = f"{-(-800 // scale)}x{-(-600 // scale)}"
@@ -183,11 +183,11 @@ def gawron(r: Renderer, repeat: int = 7) -> dict:
             s = still.model_copy(update={"time": still.time + i + 1})
             r.ctx.finish()
             t0 = time.perf_counter()
-            r.render(s)   # scene pass cached: fog pass, composite, blur, readback
+            r.render(s, lend=True)   # scene pass cached: fog pass, composite, blur, readback
             r.ctx.finish()
             return (time.perf_counter() - t0) * 1000
         out[mode] = _median(once, repeat)
-    read_ms = _median(lambda i: _timed(lambda: r.caches.targets(1920, 1080).out.read(components=3)), repeat)
+    read_ms = _median(lambda i: _timed(lambda: r.caches.targets(1920, 1080).read_image()), repeat)
     res = {"fog_ms": out["off"] - read_ms, "single_ms": out["single"] - read_ms,
            "separate_ms": out["separate"] - read_ms, "readback_ms": read_ms}
     res["single_over_separate"] = res["single_ms"] / res["separate_ms"]
@@ -267,7 +267,7 @@ def orbit_frames(r: Renderer, w: int, h: int, msaa: bool, n: int = 9) -> float:
         s = still.model_copy(update={"time": 1.0 + i / 30, "camera": still.camera.model_copy(
             update={"yaw": still.camera.yaw + 2.0 * (i + 1)})})
         t0 = time.perf_counter()
-        encode(r.render(s, slot="bench-orbit", msaa=msaa), "jpg", 80)
+        encode(r.render(s, slot="bench-orbit", msaa=msaa, lend=True), "jpg", 80)
         return (time.perf_counter() - t0) * 1000
     frame(-1)
     return _median(frame, n)
@@ -473,7 +473,7 @@ def streaming(r: Renderer, srv: ChildServer, seconds: float) -> list[dict]:
                 if orbit:
                     s = s.model_copy(update={"camera": s.camera.model_copy(update={"yaw": 2.0 * i})})
                 t0 = time.perf_counter()
-                img = r.render(s, slot="bench-stream", msaa=not orbit)
+                img = r.render(s, slot="bench-stream", msaa=not orbit, lend=True)
                 encode(img, "jpg", q)
                 return time.perf_counter() - t0
             frame(0)

@@ -16,7 +16,8 @@ from fogbank.kinds import KINDS
 from fogbank.kinds.packing import changes_with_time, enabled, groups, uses_noise, variant
 from fogbank.model.params import FogParams, StillParams
 from fogbank.render.passes.fog_filter import jittered, jittered_t
-from fogbank.render.targets import FOG_BPP, GBUFFER_BPP, LINEAR_BPP, MSAA_BPP, MSAA_SAMPLES, OUT_BPP, SUNLIGHT_BPP
+from fogbank.render.targets import (FOG_BPP, GBUFFER_BPP, LINEAR_BPP, MSAA_BPP, MSAA_SAMPLES, OUT_BPP, READBACK_BPP,
+                                   SUNLIGHT_BPP)
 
 # seconds on the reference machine
 # The scene pass (with the sky, and the resolve with MSAA), drawn over the countryside
@@ -121,7 +122,9 @@ def estimate(still: StillParams, msaa: bool = True, fmt: str = "jpg", scale: flo
         # toward the sun, the layers' code is inlined a second time
         parts[f"compiling the fog program for {len(key)} layers (once per worker)"] = \
             jit_seconds(key) * (2 if e.sun_through_fog else 1)
-    memory = px * (OUT_BPP + GBUFFER_BPP + 3 + 4) + int(fog_mpx * 1e6) * FOG_BPP * (2 if filtered else 1)
+    # the output, its kept readback (render/targets.py Targets.readback) and the scene pass,
+    # and 4 bytes a pixel of margin (the estimate's since it began)
+    memory = px * (OUT_BPP + READBACK_BPP + GBUFFER_BPP + 4) + int(fog_mpx * 1e6) * FOG_BPP * (2 if filtered else 1)
     if msaa:
         memory += px * MSAA_BPP
     if e.sun_through_fog:   # the direct sunlight: near and far surface in the G-buffer, and the MSAA target

@@ -77,7 +77,8 @@ def _fix_mmap_threshold() -> None:
         # 1280x720: 1260-1500 page faults a frame, 97-109 -> 87-90 ms a frame with them
         # gone, and 24-25 -> 19-22 ms at 448x252 (the drag's previews). The heap keeps up
         # to 16 MB free instead (8 MB was enough at 1280x720, 16 at 1920x1080); the memory
-        # budget's malloc_trim (_run) still returns all of it.
+        # budget's malloc_trim (_run) still returns all of it. The threshold holds for each
+        # arena's heap: at most 2 x 16 MB kept free in all.
         libc.mallopt(M_TRIM_THRESHOLD, TRIM_THRESHOLD_BYTES)
 
 

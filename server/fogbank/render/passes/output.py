@@ -4,8 +4,6 @@ until the next frame of that size (Renderer.render copies it unless told to lend
 
 from __future__ import annotations
 
-import numpy as np
-
 from fogbank.render.passes.base import Pass
 
 
@@ -15,8 +13,4 @@ class OutputPass(Pass):
     writes = ("image",)
 
     def run(self, r, f) -> None:
-        w, h = f.targets.size
-        raw, image = f.targets.readback()
-        f.targets.out.read_into(raw, components=3, alignment=1)
-        np.copyto(image, np.frombuffer(raw, np.uint8).reshape(h, w, 3)[::-1])
-        f.image = image
+        f.image = f.targets.read_image()
