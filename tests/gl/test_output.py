@@ -10,6 +10,7 @@ import ctypes.util
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -74,41 +75,21 @@ def test_the_readback_counts_against_the_budget_and_goes_with_its_targets(render
     assert t.nbytes() == w * h * 4    # the output renderbuffer's size is all it counts then
 
 
-_WORKER_FRAMES = """
-import json, resource
-from fogbank.workers import worker
-worker.init("auto", None, 0, 512 << 20, 0)
-from fogbank.model.params import StillParams
-from fogbank.model.presets import preset_dict
-look = StillParams.model_validate({**preset_dict("default"), "width": 1280, "height": 720})
-still = lambda i: worker.frame(look.model_copy(update={"time": 2.0 + i / 30}), "s", True, 80, hold_fog=True)
-small = look.model_copy(update={"width": 448, "height": 252})
-orbit = lambda i: worker.frame(small.model_copy(update={
-    "time": 2.0 + i / 30, "camera": look.camera.model_copy(update={"yaw": look.camera.yaw + 0.3 * i})}),
-    "o", False, 60, draft=True)
-out = {}
-for name, frame in (("still", still), ("orbit", orbit)):
-    for i in range(5):
-        frame(i)
-    r0 = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
-    for i in range(10):
-        frame(10 + i)
-    out[name] = (resource.getrusage(resource.RUSAGE_SELF).ru_minflt - r0) / 10
-print(json.dumps(out))
-"""
+WORKER_FRAMES = Path(__file__).resolve().parents[2] / "scripts" / "worker_frames.py"
 
 
 @pytest.mark.skipif(ctypes.util.find_library("c") is None, reason="the worker's malloc settings are glibc's")
 def test_a_worker_frame_maps_no_new_memory():
     """A worker process (its own malloc thresholds, workers/worker.py) drawing 1280x720
-    stream frames with the camera still, then 448x252 previews of an orbiting camera: the
-    page faults a frame, against the 675 pages (4 KiB) one fresh 1280x720 readback buffer
-    would take. Before the kept buffer the still frames took 1352 a frame: the read and the
+    stream frames with the camera still, then 448x252 previews of an orbiting camera
+    (scripts/worker_frames.py): the page faults a frame, against the 675 pages (4 KiB) one
+    fresh 1280x720 readback buffer would take. Before the kept buffer the still frames took 1352 a frame: the read and the
     contiguous copy for the encoder, each a new mapping (3.6 ms of system time); before the
     trim threshold, the previews took 383-414, the heap's top given back and faulted in
     again at every frame."""
-    out = subprocess.run([sys.executable, "-c", _WORKER_FRAMES], capture_output=True, text=True, timeout=240)
+    out = subprocess.run([sys.executable, str(WORKER_FRAMES), "--frames", "10", "--json"],
+                         capture_output=True, text=True, timeout=240)
     assert out.returncode == 0, out.stderr[-2000:]
     faults = json.loads(out.stdout.strip().splitlines()[-1])
-    assert faults["still"] < 50
-    assert faults["orbit"] < 50
+    assert faults["still 1280x720"] < 50
+    assert faults["orbit 448x252"] < 50
