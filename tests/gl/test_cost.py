@@ -95,3 +95,18 @@ def test_held_fog_leaves_out_the_layers_that_do_not_move_and_the_shafts():
                                                          {"kind": "noise", "mode": "volume"}]}).layers[0]]})
     c = cost.estimate(still_noise, scene_cached=True, fog_held=True)
     assert layers(c) == [] and not any(k.startswith("the filter") for k in c.parts)
+
+
+def test_the_readmes_still_memory_example_holds():
+    """README, "Bad input": under the default still memory budget the default look fits at
+    3200x1800 with MSAA and not at 3840x2160. It said 3840x2160 fitted, which the estimate
+    (held to what the renderer allocates above) had put at 1257 MiB, refused with a 422."""
+    from fogbank.model.presets import preset_dict
+    from fogbank.settings import Settings
+    budget = Settings().still_memory_mb << 20
+    look = preset_dict("default")
+    fits = cost.estimate(StillParams.model_validate({**look, "width": 3200, "height": 1800}))
+    over = cost.estimate(StillParams.model_validate({**look, "width": 3840, "height": 2160}))
+    assert fits.memory <= budget
+    assert over.memory > budget
+
