@@ -126,3 +126,49 @@ def test_held_frames_from_high_and_far_cameras_at_a_late_time(renderer, camera, 
     still = calibration_still(layers=layers, camera=camera, time=3.7e5,
                               effects={"scatter": 0.0, "sky_distance": 300.0})
     assert check_pixels(renderer, still, min_share=0.6, render=held_frame(renderer, "held-far")) == objects
+
+
+@pytest.mark.parametrize("scale,size", [(2, (320, 180)), (4, (203, 117))])
+def test_the_bilinear_tiles_are_those_whose_kept_weights_are_bilinear(renderer, scale, size):
+    """The held composite blends bilinearly on the tiles that passes/held_edges.frag leaves
+    unmarked: its marks, as the held fog's depths, against the tiles found in float64 from
+    the kept weights W (an odd size: the last tiles are partial)."""
+    from fogbank.model.presets import preset_dict
+    from fogbank.render.passes.composite import HELD_EDGE_WEIGHT
+    from fogbank.render.targets import SILHOUETTE_TILE as TILE
+    look = preset_dict("default")
+    w, h = size
+    look = {**look, "width": w, "height": h, "time": 7.0, "wind": {"direction": 70.0, "speed": 12.0},
+            "effects": {**look["effects"], "fog_scale": scale}}
+    s = StillParams.model_validate(look)
+    renderer.drop_slot("held-edges")
+    for t in (6.0, 6.5, 7.0):
+        renderer.render(s.model_copy(update={"time": t}), "held-edges", True, hold_fog=True)
+    held = renderer.caches.gbuffer("held-edges", w, h, True).held[scale]
+    assert held.edges_key == held.key and held.edges.size == (w, h)
+    with_edges = held.nbytes()
+    edges, held.edges = held.edges, None
+    assert with_edges - held.nbytes() == w * h * 4   # the depth24 counts in the cache's budget
+    held.edges = edges
+    weights = np.frombuffer(held.inputs.color_attachments[2].read(), np.float16).reshape(h, w, 4)
+    depth_fbo = renderer.ctx.framebuffer(depth_attachment=held.edges)
+    depth = np.frombuffer(depth_fbo.read(components=1, attachment=-1, dtype="f4"), np.float32).reshape(h, w)
+    renderer.caches.park()
+    depth_fbo.release()
+    # the bilinear weights of the four fog texels around each pixel, k = (k & 1, k >> 1)
+    y, x = np.mgrid[0:h, 0:w].astype(np.float64)
+    fx, fy = [(c + 0.5) / scale - 0.5 - np.floor((c + 0.5) / scale - 0.5) for c in (x, y)]
+    bilinear = np.stack([(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy], axis=-1)
+    dev = np.abs(weights.astype(np.float64) - bilinear).max(axis=-1)
+    rows, cols = -(-h // TILE), -(-w // TILE)
+    padded = np.zeros((rows * TILE, cols * TILE))
+    padded[:h, :w] = dev
+    tile_dev = padded.reshape(rows, TILE, cols, TILE).max(axis=(1, 3))
+    expected = np.repeat(np.repeat(tile_dev > HELD_EDGE_WEIGHT, TILE, 0), TILE, 1)[:h, :w]
+    # depth24: 0.25 and 0.75 to within a unit of 2^-24
+    assert np.allclose(sorted(np.unique(depth)), [0.25, 0.75], atol=2.0 ** -23, rtol=0.0)
+    marked = depth < 0.5
+    exact = np.abs(np.repeat(np.repeat(tile_dev, TILE, 0), TILE, 1)[:h, :w] - HELD_EDGE_WEIGHT) > 1e-6
+    assert int((marked != expected)[exact].sum()) == 0
+    assert 0.02 < float(marked.mean()) < 0.98   # both draws have pixels: the check has teeth
+    renderer.drop_slot("held-edges")

@@ -32,8 +32,21 @@ FOG_BPP = 16                                  # RGBA32F (raw T, 1/distance, T to
 # R32F tauDirect (looks with a time-invariant direct layer)
 HELD_FOG_BPP = 16
 HELD_DIRECT_BPP = 4
-# the held composite's inputs (passes/composite_inputs.frag), per pixel: three RGBA16F
+# the held composite's inputs (passes/composite_inputs.frag), per pixel: three RGBA16F;
+# and, over a coarser fog, the depth24 that marks where it needs the depth-aware weights
+# (passes/held_edges.frag)
 HELD_INPUTS_BPP = 3 * 8
+HELD_EDGES_BPP = 4
+
+
+def fog_texture(ctx: moderngl.Context, size: tuple[int, int]) -> moderngl.Texture:
+    """An RGBA32F fog target. Its readers fetch texels, but for the held composite's
+    bilinear blend (passes/composite_held.glsl heldFogTSmooth), which filters it LINEAR,
+    clamped to its edge as fogQuad's texels are."""
+    tex = ctx.texture(size, 4, dtype="f4")
+    tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
+    tex.repeat_x = tex.repeat_y = False
+    return tex
 
 
 @dataclass
@@ -112,8 +125,7 @@ class Targets:
         view ray) at 1/scale of the frame; index 1 is the filter pass's output."""
         if (scale, index) not in self.fog:
             w, h = self.size
-            tex = self.ctx.texture((-(-w // scale), -(-h // scale)), 4, dtype="f4")
-            tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+            tex = fog_texture(self.ctx, (-(-w // scale), -(-h // scale)))
             self.fog[scale, index] = (self.ctx.framebuffer(color_attachments=[tex]), tex)
         return self.fog[scale, index]
 
@@ -138,9 +150,13 @@ class HeldFog:
     whole: bool = False                 # `sums` holds the whole fog target, filtered (nothing moves)
     key: object = None
     # the held composite's inputs over this fog (passes/composite_inputs.frag): A, B, W at
-    # the frame's size, and what drew them
+    # the frame's size, and what drew them; `edges`, a depth buffer at that size that marks
+    # where W is not bilinear (passes/held_edges.frag), and the held fog's key it was drawn
+    # for (W reads the scene pass and the fog's 1/distance, not the effects)
     inputs: moderngl.Framebuffer | None = None
     inputs_key: object = None
+    edges: moderngl.Renderbuffer | None = None
+    edges_key: object = None
 
     @property
     def texture(self) -> moderngl.Texture:
@@ -155,11 +171,20 @@ class HeldFog:
             self.inputs = ctx.framebuffer(color_attachments=texs)
         return self.inputs
 
+    def edge_marks(self, ctx: moderngl.Context) -> moderngl.Renderbuffer:
+        """The depth buffer of edge marks, at the inputs' size (made after them)."""
+        if self.edges is None:
+            self.edges = ctx.depth_renderbuffer(self.inputs.size)
+            self.edges_key = None
+        return self.edges
+
     def nbytes(self) -> int:
         n = self.sums.width * self.sums.height
         n *= HELD_FOG_BPP * (2 if self.filtered else 1) + (HELD_DIRECT_BPP if self.direct else 0)
         if self.inputs is not None:
             n += self.inputs.width * self.inputs.height * HELD_INPUTS_BPP
+        if self.edges is not None:
+            n += self.edges.width * self.edges.height * HELD_EDGES_BPP
         return n
 
     def release(self) -> None:
@@ -167,7 +192,9 @@ class HeldFog:
         if self.filtered:
             release_fbo(self.filtered[0])
         release_fbo(self.inputs)
-        self.inputs = None
+        if self.edges is not None:
+            self.edges.release()
+        self.inputs = self.edges = None
 
 
 @dataclass
@@ -211,15 +238,14 @@ class GBuffer:
             h.release()
         size = (-(-self.color.width // scale), -(-self.color.height // scale))
 
-        def tex(components: int) -> moderngl.Texture:
-            t = ctx.texture(size, components, dtype="f4")
-            t.filter = (moderngl.NEAREST, moderngl.NEAREST)
-            return t
-        sums, tau_direct = tex(4), (tex(1) if direct else None)
+        sums = fog_texture(ctx, size)   # the fog target itself where nothing moves (whole)
+        tau_direct = ctx.texture(size, 1, dtype="f4") if direct else None
+        if tau_direct is not None:
+            tau_direct.filter = (moderngl.NEAREST, moderngl.NEAREST)
         fbo = ctx.framebuffer(color_attachments=[sums] + ([tau_direct] if direct else []))
         copy = None
         if filtered:
-            t = tex(4)
+            t = fog_texture(ctx, size)
             copy = (ctx.framebuffer(color_attachments=[t]), t)
         self.held[scale] = HeldFog(fbo, sums, tau_direct, copy, whole)
         return self.held[scale]

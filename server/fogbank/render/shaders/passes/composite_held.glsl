@@ -8,23 +8,41 @@ uniform sampler2D uHeldA;         // (scene less direct sunlight, linear; in-sca
 uniform sampler2D uHeldB;         // (direct sunlight, linear; the pixel's share of its fog)
 uniform sampler2D uHeldW;         // the four fog texels' upsample weights
 
-// (linear colour, T) of the pixel's near surface
-vec4 heldNear(ivec2 px) {
-    vec4 a = texelFetch(uHeldA, px, 0);
-    vec4 b = texelFetch(uHeldB, px, 0);
+// The fog texels' (raw T, T toward the sun) at px by the kept weights.
+vec2 heldFogT(ivec2 px) {
 #if FOG_SCALE == 1
-    vec2 Ts = texelFetch(uFog, px, 0).rb;
+    return texelFetch(uFog, px, 0).rb;
 #else
     vec4 w = texelFetch(uHeldW, px, 0);
     vec2 f;
     ivec2 i0 = fogQuad(px, f);
-    vec2 Ts = w.x * fogTexelOf(i0, 0).rb + w.y * fogTexelOf(i0, 1).rb
-            + w.z * fogTexelOf(i0, 2).rb + w.w * fogTexelOf(i0, 3).rb;
+    return w.x * fogTexelOf(i0, 0).rb + w.y * fogTexelOf(i0, 1).rb
+         + w.z * fogTexelOf(i0, 2).rb + w.w * fogTexelOf(i0, 3).rb;
 #endif
+}
+
+// The same where the kept weights are the bilinear ones (passes/held_edges.frag marks the
+// tiles where they are not): one filtered fetch instead of the weights and four texels.
+// uFog is filtered LINEAR and clamped to its edge (render/targets.py), so the texture unit
+// interpolates between the same four texels fogQuad names (a GPU's filter weights have 8
+// fractional bits: at most 1/512 of the four texels' spread off).
+vec2 heldFogTSmooth(ivec2 px) {
+    return texture(uFog, (vec2(px) + 0.5) / (float(FOG_SCALE) * vec2(textureSize(uFog, 0)))).rb;
+}
+
+// (linear colour, T) of the pixel's near surface from its fog texels' (raw T, T toward the sun)
+vec4 heldNearOf(ivec2 px, vec2 Ts) {
+    vec4 a = texelFetch(uHeldA, px, 0);
+    vec4 b = texelFetch(uHeldB, px, 0);
     float T = 1.0 - b.a * (1.0 - fogFinish(Ts.x));   // the sky shows only its share of the fog
     vec3 scene = a.rgb;
 #if SUN_LIGHT
     scene += Ts.y * b.rgb;   // the scene less the share 1 - T_sun of its direct sunlight
 #endif
     return vec4(T * scene + (1.0 - T) * (uFogColor + uScatterColor * a.a), T);
+}
+
+// (linear colour, T) of the pixel's near surface
+vec4 heldNear(ivec2 px) {
+    return heldNearOf(px, heldFogT(px));
 }
