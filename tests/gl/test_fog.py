@@ -11,7 +11,7 @@ import pytest
 
 from fogbank.kinds import KINDS
 from fogbank.kinds.packing import changes_with_time, split_by_time
-from fogbank.kinds.reference import transmittance as reference
+from fogbank.kinds.reference import log_layer, transmittance as reference
 from fogbank.model.params import StillParams
 from fogbank.render.passes import CompositePass, FogFilterPass, FogPass, ParticlesPass, ResolvePass, ScenePass, \
     ShadowPass, SkyPass
@@ -31,8 +31,9 @@ LOOK = {
     "effects": {"sun_through_fog": True, "shafts": 1.0, "scatter": 0.04, "sky_distance": 500.0},
     "layers": [
         {"kind": "height", "density": 0.02, "falloff": 0.15, "base": 2.0},
+        # its second term is a vertical wave, across the level wind: held (cosine split_by_time)
         {"kind": "cosine", "density": 0.004, "c0": 1.0, "scale": 20.0, "wind": True,
-         "terms": [{"amp": 0.8, "k": (1.0, 2.0, 0.5), "phase": 0.3}]},
+         "terms": [{"amp": 0.6, "k": (1.0, 2.0, 0.5), "phase": 0.3}, {"amp": 0.3, "k": (0.0, 1.5, 0.0), "phase": -0.4}]},
         {"kind": "ellipsoid", "center": (10.0, 15.0, 20.0), "radii": (40.0, 12.0, 30.0), "density": -0.01},
         # low = high: its noise does not vary it (a frame filters distant noise by the texel's
         # footprint, which the float64 reference does not)
@@ -106,8 +107,18 @@ def test_layers_that_change_with_time_are_the_sliding_and_the_simulated():
     calm = fog.model_copy(update={"wind": fog.wind.model_copy(update={"speed": 0.0})})
     assert [changes_with_time(l, calm) for l in calm.layers][:6] == [False] * 6
     held, moving = split_by_time(fog)
-    assert [l.kind for l in held.layers] == ["height", "ellipsoid", "distance", "potential"]
+    assert [l.kind for l in held.layers] == ["height", "cosine", "ellipsoid", "distance", "potential"]
     assert [l.kind for l in moving.layers] == ["cosine", "sphere", "noise", "particles"]   # the disabled one left out
+    # the cosine's term across the wind is held with the constant; the other moves alone
+    assert [(t.k, l.c0, l.wind) for l in held.layers[1:2] for t in l.terms] == [((0.0, 1.5, 0.0), 1.0, False)]
+    assert [(t.k, l.c0, l.wind) for l in moving.layers[:1] for t in l.terms] == [((1.0, 2.0, 0.5), 0.0, True)]
+    # their optical depths add up to the layer's (float64, random rays at a late time)
+    rng = np.random.default_rng(5)
+    O, w = rng.normal(size=(64, 3)) * 200.0, rng.normal(size=(64, 3))
+    w /= np.linalg.norm(w, axis=1, keepdims=True)
+    d, t = rng.uniform(1.0, 900.0, 64), np.full(64, 1.0e5)
+    parts = log_layer(held.layers[1], fog, O, w, d, t) + log_layer(moving.layers[0], fog, O, w, d, t)
+    assert np.allclose(parts, log_layer(fog.layers[1], fog, O, w, d, t), rtol=1e-9, atol=1e-12)
 
 
 def test_a_still_camera_holds_the_fog_that_does_not_move_and_each_frame_matches_the_reference(renderer):

@@ -84,6 +84,21 @@ def pack(layer, p):
             "terms": np.ravel(terms), "amps": [t.amp for t in layer.terms]}
 
 
+def split_by_time(layer, v):
+    """A term whose wave vector is across the velocity (k . v = 0, e.g. a vertical wave
+    under a level wind) has the same phase at every time: (the constant and those terms,
+    without wind; the other terms, with no constant), whose optical depths add up to the
+    layer's (each term's integral is its own, Biri 3.2.1). The moving part's c0 = 0 is
+    below the sum of its |amp|: it is never drawn alone, only added to the other part."""
+    still = [t for t in layer.terms if float(np.dot(t.k, v)) == 0.0]
+    if not still:
+        return None, layer
+    moving = [t for t in layer.terms if float(np.dot(t.k, v)) != 0.0]
+    # without wind its packing is the same at every time (no phase that rounds differently)
+    still_part = layer.model_copy(update={"terms": still, "wind": False})
+    return still_part, (layer.model_copy(update={"terms": moving, "c0": 0.0}) if moving else None)
+
+
 def code(r, variant):
     (n,) = variant
     body = [f"float acc = {r.c0} * ds;", f"vec3 Ou = Os * {r.inv_scale};", f"vec3 wu = w * {r.inv_scale};"]
@@ -121,4 +136,5 @@ KIND = Kind(
     extra_seconds=lambda layer, fog_mpx: 0.01 * len(layer.terms) * fog_mpx,
     describe=lambda layer: f"cosine, {len(layer.terms)} terms",
     jit_units=lambda variant: 1.5 * variant[0],
+    split_by_time=split_by_time,
 )

@@ -212,6 +212,11 @@ class Kind:
     extra_seconds: Callable[[Any, float], float] = lambda layer, fog_mpx: 0.0
     describe: Callable[[Any], str] = lambda layer: layer.kind
     jit_units: Callable[[tuple], float] = lambda variant: 1.0
+    # A layer that changes with time as two layers whose optical depths add up to its own:
+    # the part that does not change, and the part that does (either None), given the
+    # velocity its density slides with (kinds/packing.py split_by_time); None: the whole
+    # layer changes
+    split_by_time: Callable[[Any, np.ndarray], tuple] | None = None
     # Several layers of this kind are one loop in the fog program (kinds/packing.py
     # layer_code): False for kinds whose code is so small that 16 inlined copies compile
     # about as fast, where the loop's dynamic uniform reads would only cost every frame

@@ -40,10 +40,20 @@ def changes_with_time(layer, fog) -> bool:
 
 def split_by_time(fog) -> tuple:
     """The look as two: its enabled layers that do not change with time, and the others
-    (each a copy of the look with only those layers, in their order)."""
+    (each a copy of the look with only those layers, in their order). A layer that changes
+    with time but whose kind can split it (Kind.split_by_time: a cosine's terms across the
+    wind) gives each part its share."""
     parts: tuple[list, list] = ([], [])
     for _, layer in enabled(fog):
-        parts[changes_with_time(layer, fog)].append(layer)
+        split = KINDS[layer.kind].split_by_time
+        if not changes_with_time(layer, fog):
+            parts[0].append(layer)
+        elif split is None:
+            parts[1].append(layer)
+        else:
+            for part, share in zip(parts, split(layer, velocity(layer, fog.wind.vector()))):
+                if share is not None:
+                    part.append(share)
     return tuple(fog.model_copy(update={"layers": part}) for part in parts)
 
 
