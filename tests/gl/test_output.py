@@ -65,13 +65,13 @@ def test_the_readback_counts_against_the_budget_and_goes_with_its_targets(render
     raw, image = t.readback()
     assert np.shares_memory(image, lent)     # the frame's own buffer, not one made by this call
     assert len(raw) == w * h * 3 and image.shape == (h, w, 3)
-    kept = t._readback
-    t._readback = None
+    kept = dict(t._readback)
+    t._readback.clear()
     without = t.nbytes()
-    t._readback = kept
+    t._readback.update(kept)
     assert t.nbytes() - without == w * h * READBACK_BPP
     r.release_caches()   # the targets go, their readback with them
-    assert t._readback is None
+    assert t._readback == {}
     assert t.nbytes() == w * h * 4    # the output renderbuffer's size is all it counts then
 
 
@@ -93,3 +93,29 @@ def test_a_worker_frame_maps_no_new_memory():
     faults = json.loads(out.stdout.strip().splitlines()[-1])
     assert faults["still 1280x720"] < 50
     assert faults["orbit 448x252"] < 50
+
+
+def test_a_frame_read_as_rgbx_is_the_rgb_frame_and_encodes_to_the_same_jpeg(renderer):
+    """A stream frame reads back 4 bytes a pixel (Renderer.render channels=4, for the JPEG
+    encoder): the same pixels as the 3-byte read, alpha 255, top row first against an
+    independent read() of the target flipped by hand; the JPEG of both is the same bytes;
+    a PNG of it is the RGB image's PNG; and its buffers count in the targets' bytes."""
+    from fogbank.render.encode import encode
+    from fogbank.render.renderer import Renderer
+    r = Renderer(renderer.ctx, cache_bytes=64 << 20)
+    w, h = 203, 117   # rows of 609 and 812 bytes: neither packs to 4-byte alignment alone
+    look = _look(w, h)
+    rgb = r.render(look, slot="rgbx-test")
+    rgbx = r.render(look, slot="rgbx-test", channels=4)
+    t = r.caches.targets(w, h)
+    by_hand = np.frombuffer(t.out.read(components=4, alignment=1), np.uint8).reshape(h, w, 4)[::-1]
+    assert rgbx.shape == (h, w, 4) and np.array_equal(rgbx, by_hand)
+    assert np.array_equal(rgbx[..., :3], rgb) and int(rgbx[..., 3].min()) == 255
+    assert float(rgb.std()) > 10.0   # a picture, not a flat fill: the check has teeth
+    assert encode(rgbx, "jpg", 80) == encode(rgb, "jpg", 80)
+    assert encode(rgbx, "png") == encode(rgb, "png")
+    both = t.nbytes()
+    rgbx_buffers = t._readback.pop(4)
+    assert both - t.nbytes() == w * h * 2 * 4   # the RGBX read and its flipped image
+    t._readback[4] = rgbx_buffers
+    r.release_caches()

@@ -108,6 +108,7 @@ class Frame:
     raymarch_steps: int | None = None
     sun_view_proj: np.ndarray | None = None
     fog_tex: Any = None
+    channels: int = 3              # the image's: 3 RGB, 4 RGBX (passes/output.py)
     image: np.ndarray | None = None
 
     def fog_plan(self) -> FogPlan:

@@ -78,15 +78,17 @@ class Renderer:
                      scene_key=key, scene_cached=cached, coarse_shadow=coarse)
 
     def render(self, still, slot: str = "still", msaa: bool = True, hold_fog: bool = False,
-               draft: bool = False, lend: bool = False) -> np.ndarray:
+               draft: bool = False, lend: bool = False, channels: int = 3) -> np.ndarray:
         """The frame as (height, width, 3) uint8 sRGB, top row first. `slot` names whose
         scene pass is cached (a session id; stills share one); `msaa` off is the cheap
         preview used while a user drags, and `draft` lets it take the preview shadow map;
         `hold_fog` keeps the fog's time-invariant part while the camera stays (a stream's
         frames: time runs, the camera is still). `lend`: the frame size's readback buffer
         itself (passes/output.py), overwritten by the next frame of that size, for a caller
-        that encodes it at once (workers/worker.py); else a copy the caller owns."""
+        that encodes it at once (workers/worker.py); else a copy the caller owns.
+        `channels` 4: RGBX (alpha 255), which reads back faster, for a JPEG."""
         frame = self.begin(still, slot, msaa, hold_fog, draft)
+        frame.channels = channels
         for p in FRAME_PASSES:
             p.run(self, frame)
         self.keep_only(frame)

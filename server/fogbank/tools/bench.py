@@ -267,7 +267,7 @@ def orbit_frames(r: Renderer, w: int, h: int, msaa: bool, n: int = 9) -> float:
         s = still.model_copy(update={"time": 1.0 + i / 30, "camera": still.camera.model_copy(
             update={"yaw": still.camera.yaw + 2.0 * (i + 1)})})
         t0 = time.perf_counter()
-        encode(r.render(s, slot="bench-orbit", msaa=msaa, lend=True), "jpg", 80)
+        encode(r.render(s, slot="bench-orbit", msaa=msaa, lend=True, channels=4), "jpg", 80)
         return (time.perf_counter() - t0) * 1000
     frame(-1)
     return _median(frame, n)
@@ -290,6 +290,7 @@ def where_the_time_goes(r: Renderer, w: int = 1280, h: int = 720, n: int = 7, or
             s = s.model_copy(update={"camera": still.camera.model_copy(update={"yaw": still.camera.yaw + 2.0 * (i + 1)})})
         t0 = time.perf_counter()
         f = r.begin(s, "bench-orbit" if orbit else "bench-still", not orbit, hold_fog=not orbit)
+        f.channels = 4   # read back as a stream frame is, for its JPEG
         f.fog_plan()
         times.setdefault("begin, fog plan", []).append((time.perf_counter() - t0) * 1000)
         for p in FRAME_PASSES:
@@ -473,7 +474,7 @@ def streaming(r: Renderer, srv: ChildServer, seconds: float) -> list[dict]:
                 if orbit:
                     s = s.model_copy(update={"camera": s.camera.model_copy(update={"yaw": 2.0 * i})})
                 t0 = time.perf_counter()
-                img = r.render(s, slot="bench-stream", msaa=not orbit, lend=True)
+                img = r.render(s, slot="bench-stream", msaa=not orbit, lend=True, channels=4)
                 encode(img, "jpg", q)
                 return time.perf_counter() - t0
             frame(0)

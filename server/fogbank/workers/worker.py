@@ -203,7 +203,7 @@ def frame(still, slot: str, msaa: bool, quality: int, show: str = "shaded", laye
         stats, reused = None, None
         work = (r.programs.compiled, r.noise.baked, r.shadows.new_suns)
         if show == "shaded":
-            img = r.render(still, slot=slot, msaa=msaa, hold_fog=hold_fog, draft=draft, lend=True)
+            img = r.render(still, slot=slot, msaa=msaa, hold_fog=hold_fog, draft=draft, lend=True, channels=4)
             reused = r.scene_reused
         else:
             img, stats = teach.render(r, still, show, layer, slot=slot)
