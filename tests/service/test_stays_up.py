@@ -157,6 +157,24 @@ def status_and_json(resp: bytes) -> tuple[int, dict]:
     return int(head.split()[1]), json.loads(body)
 
 
+def test_the_stream_is_not_deflated_though_the_client_offers_it(server):
+    """The frames are JPEG: the server declines permessage-deflate (cli.py), which a
+    browser and the websockets client offer, and the frames still come."""
+    async def go():
+        async with websockets.connect(server.url.replace("http", "ws", 1) + "/ws?v=1&time=3") as ws:
+            offered = ws.request.headers.get("Sec-WebSocket-Extensions", "")
+            accepted = ws.response.headers.get("Sec-WebSocket-Extensions")
+            await ws.recv(), await ws.recv()
+            await ws.send(json.dumps({"type": "view", "width": 160, "height": 90, "fps": 30}))
+            while not isinstance(frame := await asyncio.wait_for(ws.recv(), 60), bytes):
+                pass
+            return offered, accepted, frame
+    offered, accepted, frame = run_async(go())
+    assert "permessage-deflate" in offered
+    assert accepted is None
+    assert frame[-2:] == b"\xff\xd9"   # a whole JPEG (its end-of-image marker)
+
+
 def test_a_100_mb_body_is_refused_before_it_is_read(server):
     before = proctree.tree_rss_bytes(server.proc.pid)
     c = http.client.HTTPConnection("127.0.0.1", server.port, timeout=30)
