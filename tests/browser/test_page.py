@@ -69,8 +69,12 @@ def test_density_control_changes_picture_and_url(server, browser):
     page.locator("[data-path='density']").fill("3")
     page.locator("[data-path='density']").press("Enter")
     page.wait_for_function("location.search.includes('density=3')")
+    # the stream settled (in one full suite a preview was on the canvas 0.3 s after the
+    # full frame), then its last frame is the new look's, in full
+    wait_quiet(page)
     wait_full_frame_of_current_version(page, newer_than=v0)
     after = canvas_pixels(page)
+    assert after.shape == before.shape
     assert np.abs(after - before).mean() > 4
     assert page.errors == []
     page.context.close()
