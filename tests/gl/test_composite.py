@@ -172,3 +172,38 @@ def test_the_bilinear_tiles_are_those_whose_kept_weights_are_bilinear(renderer, 
     assert int((marked != expected)[exact].sum()) == 0
     assert 0.02 < float(marked.mean()) < 0.98   # both draws have pixels: the check has teeth
     renderer.drop_slot("held-edges")
+
+
+@pytest.mark.parametrize("case", [
+    {"width": 1, "height": 1, "time": 3.7e5, "fog_scale": 2},
+    {"width": 5, "height": 7, "time": 9.9e5, "fog_scale": 4,
+     "camera": {"position": (2.0, 700.0, -73.0), "yaw": 0.0, "pitch": -89.0, "fov": 10.0}},
+    {"width": 203, "height": 117, "time": 9.9e5, "fog_scale": 4, "blur": "separate",
+     "camera": {"position": (9900.0, 900.0, -9000.0), "yaw": 140.0, "pitch": -3.0, "fov": 40.0}},
+    {"width": 640, "height": 2, "time": 3.0, "fog_scale": 2,
+     "camera": {"position": (-35.0, 36.0, 85.0), "yaw": 30.0, "pitch": -11.0, "fov": 120.0}},
+])
+def test_held_frames_across_the_domain_equal_the_full_composite(renderer, case):
+    """The held composite's bilinear and kept draws over the schema's extremes: a 1x1 frame,
+    slivers, a camera 13 km out and one 700 m up, times up to 9.9e5 s, fog scales 2 and 4,
+    with three layers of kinds drawn at random (each under the wind): the same frame
+    composited in full, within a level."""
+    import json
+    from fogbank.kinds import KINDS
+    from fogbank.model.presets import preset_dict
+    rng = np.random.default_rng(case["width"] * 31 + case["height"])
+    kinds = sorted(k for k in KINDS if k != "particles")
+    layers = [{**json.loads(KINDS[kinds[j]].sample(rng).model_dump_json()), "wind": True}
+              for j in rng.choice(len(kinds), 3)]
+    look = preset_dict("default")
+    look.update({k: case[k] for k in ("width", "height", "time", "camera") if k in case})
+    look.update(layers=look["layers"] + layers, wind={"direction": 70.0, "speed": 12.0},
+                effects={**look["effects"], "fog_scale": case["fog_scale"], "blur": case.get("blur", "off")})
+    s = StillParams.model_validate(look)
+    held = held_frame(renderer, "held-domain")(s).astype(int)
+    renderer.drop_slot("full-domain")
+    full = renderer.render(s, "full-domain", True).astype(int)
+    renderer.drop_slot("full-domain")
+    assert held.shape == full.shape == (case["height"], case["width"], 3)
+    assert int(np.abs(held - full).max()) <= 1
+    assert renderer.ctx.error == "GL_NO_ERROR"
