@@ -90,10 +90,11 @@ def split_by_time(layer, v):
     without wind; the other terms, with no constant), whose optical depths add up to the
     layer's (each term's integral is its own, Biri 3.2.1). The moving part's c0 = 0 is
     below the sum of its |amp|: it is never drawn alone, only added to the other part."""
-    still = [t for t in layer.terms if float(np.dot(t.k, v)) == 0.0]
+    across = [float(np.dot(t.k, v)) == 0.0 for t in layer.terms]
+    still = [t for t, a in zip(layer.terms, across) if a]
     if not still:
         return None, layer
-    moving = [t for t in layer.terms if float(np.dot(t.k, v)) != 0.0]
+    moving = [t for t, a in zip(layer.terms, across) if not a]
     # without wind its packing is the same at every time (no phase that rounds differently)
     still_part = layer.model_copy(update={"terms": still, "wind": False})
     return still_part, (layer.model_copy(update={"terms": moving, "c0": 0.0}) if moving else None)

@@ -23,6 +23,11 @@ ivec2 fogQuad(ivec2 px, out vec2 f) {
     return i0;
 }
 
+// The four texels' bilinear weights at px's place f among them, k = 0..3.
+vec4 bilinearWeights(vec2 f) {
+    return vec4((1.0 - f.x) * (1.0 - f.y), f.x * (1.0 - f.y), (1.0 - f.x) * f.y, f.x * f.y);
+}
+
 vec4 fogTexelOf(ivec2 i0, int k) {
     return texelFetch(uFog, clamp(i0 + ivec2(k & 1, k >> 1), ivec2(0), textureSize(uFog, 0) - 1), 0);
 }
@@ -31,13 +36,12 @@ vec4 fogTexelOf(ivec2 i0, int k) {
 // to this pixel's, normalised; with no neighbour on this surface (a thin object), all on
 // the closest in depth.
 vec4 fogWeights(vec4 s[4], vec2 f, float invd) {
-    vec4 w, best = vec4(1.0, 0.0, 0.0, 0.0);
+    vec4 w, best = vec4(1.0, 0.0, 0.0, 0.0), wb = bilinearWeights(f);
     float bestRel = 1e9;
     for (int k = 0; k < 4; ++k) {
         // relative depth difference in [0, 1]; 1e-6 1/m keeps sky-vs-sky at 0
         float rel = abs(s[k].g - invd) / max(max(s[k].g, invd), 1e-6);
-        float wb = ((k & 1) == 1 ? f.x : 1.0 - f.x) * ((k >> 1) == 1 ? f.y : 1.0 - f.y);
-        w[k] = wb * exp(-rel * rel * 400.0);   // ~5% difference halves the weight
+        w[k] = wb[k] * exp(-rel * rel * 400.0);   // ~5% difference halves the weight
         if (rel < bestRel) { bestRel = rel; best = vec4(k == 0, k == 1, k == 2, k == 3); }
     }
     float wsum = w.x + w.y + w.z + w.w;

@@ -17,8 +17,7 @@ void main() {
             ivec2 p = min(base + ivec2(x, y), size - 1);
             vec2 f;
             fogQuad(p, f);
-            vec4 wb = vec4((1.0 - f.x) * (1.0 - f.y), f.x * (1.0 - f.y), (1.0 - f.x) * f.y, f.x * f.y);
-            vec4 d = abs(texelFetch(uHeldW, p, 0) - wb);
+            vec4 d = abs(texelFetch(uHeldW, p, 0) - bilinearWeights(f));
             dev = max(dev, max(max(d.x, d.y), max(d.z, d.w)));
         }
     fEdge = dev > EDGE_WEIGHT ? 1.0 : 0.0;
