@@ -150,7 +150,7 @@ def test_the_bilinear_tiles_are_those_whose_kept_weights_are_bilinear(renderer, 
     edges, held.edges = held.edges, None
     assert with_edges - held.nbytes() == w * h * 4   # the depth24 counts in the cache's budget
     held.edges = edges
-    weights = np.frombuffer(held.inputs.color_attachments[2].read(), np.float16).reshape(h, w, 4)
+    weights = np.frombuffer(held.inputs.color_attachments[1].read(), np.float16).reshape(h, w, 4)
     depth_fbo = renderer.ctx.framebuffer(depth_attachment=held.edges)
     depth = np.frombuffer(depth_fbo.read(components=1, attachment=-1, dtype="f4"), np.float32).reshape(h, w)
     renderer.caches.park()

@@ -14,7 +14,7 @@ from fogbank.render.glsl import ShaderError
 TEX = {"uColor": 0, "uInvDist": 1, "uFog": 2, "uParticles": 3, "uNoise": 4, "uShadow": 5,
        "uRays": 6, "uImage": 0, "uSunLight": 7, "uFarColor": 8, "uFarInvDist": 9, "uFarSunLight": 10,
        "uTiles": 11, "uLightmap": 12, "uHeld": 13, "uHeldDirect": 14,
-       "uHeldA": 15, "uHeldB": 16, "uHeldW": 17, "uEdges": 18}
+       "uHeldAB": 15, "uHeldW": 17, "uEdges": 18}
 
 
 def usable_cores() -> int:

@@ -32,10 +32,11 @@ FOG_BPP = 16                                  # RGBA32F (raw T, 1/distance, T to
 # R32F tauDirect (looks with a time-invariant direct layer)
 HELD_FOG_BPP = 16
 HELD_DIRECT_BPP = 4
-# the held composite's inputs (passes/composite_inputs.frag), per pixel: three RGBA16F;
+# the held composite's inputs (passes/composite_inputs.frag), per pixel: A and B packed as
+# halves in an RGBA32UI, and W in an RGBA16F;
 # and, over a coarser fog, the depth24 that marks where it needs the depth-aware weights
 # (passes/held_edges.frag)
-HELD_INPUTS_BPP = 3 * 8
+HELD_INPUTS_BPP = 16 + 8
 HELD_EDGES_BPP = 4
 
 
@@ -152,7 +153,7 @@ class HeldFog:
     filtered: tuple[moderngl.Framebuffer, moderngl.Texture] | None
     whole: bool = False                 # `sums` holds the whole fog target, filtered (nothing moves)
     key: object = None
-    # the held composite's inputs over this fog (passes/composite_inputs.frag): A, B, W at
+    # the held composite's inputs over this fog (passes/composite_inputs.frag): AB, W at
     # the frame's size, and what drew them; `edges`, a depth buffer at that size that marks
     # where W is not bilinear (passes/held_edges.frag), and the held fog's key it was drawn
     # for (W reads the scene pass and the fog's 1/distance, not the effects)
@@ -168,7 +169,7 @@ class HeldFog:
 
     def composite_inputs(self, ctx: moderngl.Context, size: tuple[int, int]) -> moderngl.Framebuffer:
         if self.inputs is None:
-            texs = [ctx.texture(size, 4, dtype="f2") for _ in range(3)]
+            texs = [ctx.texture(size, 4, dtype="u4"), ctx.texture(size, 4, dtype="f2")]
             for t in texs:
                 t.filter = (moderngl.NEAREST, moderngl.NEAREST)
             self.inputs = ctx.framebuffer(color_attachments=texs)

@@ -65,7 +65,7 @@ class CompositePass(Pass):
             inputs = self._held_inputs(r, f, defines)
             progs = [r.programs.get(FULLSCREEN, "passes/composite_held.frag", SMOOTH=0, **defines)]
             if smooth:
-                self._held_edges(r, f, f.held_fog, inputs.color_attachments[2])
+                self._held_edges(r, f, f.held_fog, inputs.color_attachments[1])
                 progs.append(r.programs.get(FULLSCREEN, "passes/composite_held.frag", SMOOTH=1, **defines))
         else:
             progs = [r.programs.get(FULLSCREEN, "passes/composite.frag", TWO_SURFACES=0, **defines)]
@@ -88,7 +88,7 @@ class CompositePass(Pass):
             # the held composite reads only the colours and the max opacity per frame
             set_uniforms(prog, {k: uniforms[k] for k in HELD_UNIFORMS} if i < n_held else uniforms)
         if held:   # the held composite and, for the near surface, the two-surface draw
-            for name, tex in zip(("uHeldA", "uHeldB", "uHeldW"), inputs.color_attachments):
+            for name, tex in zip(("uHeldAB", "uHeldW"), inputs.color_attachments):
                 tex.use(TEX[name])
         if mode == BLUR_MODES["single"]:
             g.mipmaps()   # the fused blur reads the scene's mip pyramid

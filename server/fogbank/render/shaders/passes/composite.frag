@@ -10,6 +10,8 @@
 // dimmed by the fog toward the sun), TWO_SURFACES (0: every pixel's near surface;
 // 1: a second draw that redoes the pixels with a far surface, both mixed) and HELD_NEAR
 // (1: the near surface from the held composite's inputs, render/passes/composite.py).
+// packHalf2x16 / unpackHalf2x16 (core from GLSL 4.20): the held inputs' AB
+#extension GL_ARB_shading_language_packing : require
 #include "common/camera.glsl"
 #include "common/srgb.glsl"
 #include "fog/finish.glsl"

@@ -6,6 +6,8 @@
 // where the kept weights are the bilinear ones (heldFogTSmooth), SMOOTH 0 elsewhere.
 // Defined by the renderer: FOG_SCALE (1, 2, 4), BLUR_MODE (0 off, 2 separate passes
 // follow; the fused blur takes passes/composite.frag), SUN_LIGHT, SMOOTH.
+// packHalf2x16 / unpackHalf2x16 (core from GLSL 4.20): the held inputs' AB
+#extension GL_ARB_shading_language_packing : require
 #include "common/srgb.glsl"
 #include "fog/finish.glsl"
 #include "passes/composite_parts.glsl"

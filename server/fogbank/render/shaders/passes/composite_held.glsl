@@ -4,8 +4,9 @@
 // the kept upsample weights. Used by passes/composite_held.frag for every pixel, and by
 // the two-surface draw (passes/composite.frag HELD_NEAR) for the near surface.
 // Defined by the renderer: FOG_SCALE (1, 2, 4), SUN_LIGHT.
-uniform sampler2D uHeldA;         // (scene less direct sunlight, linear; in-scattering lobe x lit term)
-uniform sampler2D uHeldB;         // (direct sunlight, linear; the pixel's share of its fog)
+uniform usampler2D uHeldAB;       // A and B as eight halves:
+                                  //   A (scene less direct sunlight, linear; in-scattering lobe x lit term)
+                                  //   B (direct sunlight, linear; the pixel's share of its fog)
 uniform sampler2D uHeldW;         // the four fog texels' upsample weights
 
 // The fog texels' (raw T, T toward the sun) at px by the kept weights.
@@ -32,8 +33,9 @@ vec2 heldFogTSmooth(ivec2 px) {
 
 // (linear colour, T) of the pixel's near surface from its fog texels' (raw T, T toward the sun)
 vec4 heldNearOf(ivec2 px, vec2 Ts) {
-    vec4 a = texelFetch(uHeldA, px, 0);
-    vec4 b = texelFetch(uHeldB, px, 0);
+    uvec4 ab = texelFetch(uHeldAB, px, 0);
+    vec4 a = vec4(unpackHalf2x16(ab.x), unpackHalf2x16(ab.y));
+    vec4 b = vec4(unpackHalf2x16(ab.z), unpackHalf2x16(ab.w));
     float T = 1.0 - b.a * (1.0 - fogFinish(Ts.x));   // the sky shows only its share of the fog
     vec3 scene = a.rgb;
 #if SUN_LIGHT
