@@ -207,3 +207,47 @@ def test_held_frames_across_the_domain_equal_the_full_composite(renderer, case):
     assert held.shape == full.shape == (case["height"], case["width"], 3)
     assert int(np.abs(held - full).max()) <= 1
     assert renderer.ctx.error == "GL_NO_ERROR"
+
+
+@pytest.mark.parametrize("blur", ["off", "separate"])
+def test_held_two_surface_pixels_are_listed_and_composited_in_place(renderer, blur):
+    """The held composite draws the pixels with two surfaces packed (HeldFog.far_pixels)
+    and copies them into place: the list holds exactly the pixels whose near coverage is
+    below 1, each once, its padding a listed pixel, the index inverts it, the bytes count;
+    and at those pixels the held frame is the full composite's within a level (without
+    the copy, 53-66 levels off)."""
+    from fogbank.model.presets import preset_dict
+    from fogbank.render.targets import FAR_LIST_WIDTH
+    look = preset_dict("default")
+    look = {**look, "width": 203, "height": 117, "time": 7.0, "wind": {"direction": 70.0, "speed": 12.0},
+            "effects": {**look["effects"], "blur": blur}}
+    s = StillParams.model_validate(look)
+    renderer.drop_slot("held-far")
+    for t in (5.5, 6.0, 6.5):
+        renderer.render(s.model_copy(update={"time": t}), "held-far", True, hold_fog=True)
+    held = renderer.render(s, "held-far", True, hold_fog=True).astype(int)
+    g = renderer.caches.gbuffer("held-far", s.width, s.height, s.effects.sun_through_fog)
+    h = g.held[s.effects.fog_scale]
+    assert h.inputs_key is not None
+    cover = np.frombuffer(g.far_color.read(), np.float16).reshape(s.height, s.width, 4)[..., 3]
+    two = cover < 1.0
+    n = int(two.sum())
+    assert h.far_count == n and n > 50
+    listed = np.frombuffer(h.far_list.read(), np.int32).reshape(-1, 2)
+    assert len(listed) == -(-n // FAR_LIST_WIDTH) * FAR_LIST_WIDTH
+    xs, ys = listed[:n, 0], listed[:n, 1]
+    assert bool(two[ys, xs].all()) and len(set(zip(xs.tolist(), ys.tolist()))) == n
+    assert bool(two[listed[n:, 1], listed[n:, 0]].all())   # the padding repeats a listed pixel
+    index = np.frombuffer(h.far_index.read(), np.int32).reshape(s.height, s.width)
+    assert bool((index[~two] == -1).all())
+    assert np.array_equal(index[ys, xs], np.arange(n))
+    with_far = h.nbytes()
+    far_index, h.far_index = h.far_index, None
+    assert with_far - h.nbytes() == s.width * s.height * 4 + len(listed) * 16
+    h.far_index = far_index
+    renderer.drop_slot("full-far")
+    full = renderer.render(s, "full-far", True).astype(int)
+    renderer.drop_slot("full-far")
+    renderer.drop_slot("held-far")
+    assert int(np.abs(held - full).max()) <= 1
+    assert renderer.ctx.error == "GL_NO_ERROR"

@@ -38,6 +38,12 @@ HELD_DIRECT_BPP = 4
 # (passes/held_edges.frag)
 HELD_INPUTS_BPP = 16 + 8
 HELD_EDGES_BPP = 4
+# the held composite's two-surface pixels (HeldFog.far_pixels): an R32I index per pixel, and
+# per listed pixel its RG32I coordinates and its composite (RGBA8, or RGBA16F before the
+# separate blur)
+HELD_FAR_INDEX_BPP = 4
+HELD_FAR_LISTED_BPP = 8 + 8
+FAR_LIST_WIDTH = 256   # texels a row of HeldFog.far_list
 
 
 def fog_texture(ctx: moderngl.Context, size: tuple[int, int]) -> moderngl.Texture:
@@ -161,6 +167,13 @@ class HeldFog:
     inputs_key: object = None
     edges: moderngl.Renderbuffer | None = None
     edges_key: object = None
+    # its scene pass's pixels with two surfaces (far_pixels): their coordinates, listed
+    # FAR_LIST_WIDTH a row; each pixel's place in that list (-1: one surface); how many; and
+    # their composite, by output dtype ("f1" or "f2"; HeldFog.far_target)
+    far_list: moderngl.Texture | None = None
+    far_index: moderngl.Texture | None = None
+    far_count: int = -1
+    far_out: dict = field(default_factory=dict)
 
     @property
     def texture(self) -> moderngl.Texture:
@@ -182,9 +195,49 @@ class HeldFog:
             self.edges_key = None
         return self.edges
 
+    def far_pixels(self, ctx: moderngl.Context, g: "GBuffer") -> int:
+        """List the scene pass's pixels with two surfaces (far_color's coverage below 1),
+        once per held fog: the held composite draws them packed into FAR_LIST_WIDTH-wide
+        rows (passes/composite.frag COMPACT), every lane a pixel with two surfaces, then
+        copies each to its place (passes/far_scatter.frag). Drawn where they lie, over the
+        silhouette tiles, two of three of llvmpipe's lanes ran for pixels of one surface (at
+        1280x720 of the default look, 8084 such pixels in 2362 tiles fill 3073 groups of 8
+        lanes). Returns how many; the list's padding repeats its last pixel."""
+        if self.far_count >= 0:
+            return self.far_count
+        w, h = g.far_color.size
+        cover = np.frombuffer(g.far_color.read(), np.float16).reshape(h, w, 4)[..., 3]
+        ys, xs = np.nonzero(cover < 1.0)
+        n = len(xs)
+        index = np.full((h, w), -1, np.int32)
+        index[ys, xs] = np.arange(n, dtype=np.int32)
+        self.far_index = ctx.texture((w, h), 1, dtype="i4", data=index.tobytes())
+        rows = max(1, -(-n // FAR_LIST_WIDTH))
+        coords = np.zeros((rows * FAR_LIST_WIDTH, 2), np.int32)
+        if n:
+            coords[:n] = np.stack([xs, ys], axis=1)
+            coords[n:] = coords[n - 1]
+        self.far_list = ctx.texture((FAR_LIST_WIDTH, rows), 2, dtype="i4", data=coords.tobytes())
+        for t in (self.far_index, self.far_list):
+            t.filter = (moderngl.NEAREST, moderngl.NEAREST)
+        self.far_count = n
+        return n
+
+    def far_target(self, ctx: moderngl.Context, dtype: str) -> tuple[moderngl.Framebuffer, moderngl.Texture]:
+        """The listed pixels' composite, in the output's format (`dtype` "f1": the sRGB
+        output; "f2": the linear target before the separate blur)."""
+        if dtype not in self.far_out:
+            tex = ctx.texture(self.far_list.size, 4, dtype=dtype)
+            tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+            self.far_out[dtype] = (ctx.framebuffer(color_attachments=[tex]), tex)
+        return self.far_out[dtype]
+
     def nbytes(self) -> int:
         n = self.sums.width * self.sums.height
         n *= HELD_FOG_BPP * (2 if self.filtered else 1) + (HELD_DIRECT_BPP if self.direct else 0)
+        if self.far_index is not None:
+            n += self.far_index.width * self.far_index.height * HELD_FAR_INDEX_BPP
+            n += self.far_list.width * self.far_list.height * HELD_FAR_LISTED_BPP
         if self.inputs is not None:
             n += self.inputs.width * self.inputs.height * HELD_INPUTS_BPP
         if self.edges is not None:
@@ -198,7 +251,14 @@ class HeldFog:
         release_fbo(self.inputs)
         if self.edges is not None:
             self.edges.release()
-        self.inputs = self.edges = None
+        for t in (self.far_index, self.far_list):
+            if t is not None:
+                t.release()
+        for fbo, _ in self.far_out.values():
+            release_fbo(fbo)
+        self.inputs = self.edges = self.far_index = self.far_list = None
+        self.far_out.clear()
+        self.far_count = -1
 
 
 @dataclass

@@ -13,7 +13,7 @@ from fogbank.render.gl import TEX, set_uniforms
 from fogbank.render.passes.base import Pass
 from fogbank.render.passes.sky import sun_color
 from fogbank.render.programs import FULLSCREEN
-from fogbank.render.targets import SILHOUETTE_TILE
+from fogbank.render.targets import FAR_LIST_WIDTH, SILHOUETTE_TILE
 
 BLUR_MODES = {"off": 0, "single": 1, "separate": 2}
 HELD_UNIFORMS = ("uFogColor", "uScatterColor", "uMaxOpacity")
@@ -70,10 +70,17 @@ class CompositePass(Pass):
         else:
             progs = [r.programs.get(FULLSCREEN, "passes/composite.frag", TWO_SURFACES=0, **defines)]
         n_held = len(progs) if held else 0   # the held composite's draws, which read few uniforms
-        if g.two_surfaces:
+        tiled = {"uViewport": np.array(f.targets.size, dtype=float), "uTileCols": g.tiles.width}
+        if g.two_surfaces and held:   # the two-surface pixels packed, then put in place
+            progs.append(r.programs.get(FULLSCREEN, "passes/composite.frag", TWO_SURFACES=1, HELD_NEAR=1,
+                                        COMPACT=1, **defines))
+            scatter = r.programs.get("passes/tiles.vert", "passes/far_scatter.frag", TILE=SILHOUETTE_TILE,
+                                     FAR_LIST_WIDTH=FAR_LIST_WIDTH)
+            set_uniforms(scatter, tiled)
+        elif g.two_surfaces:
             progs.append(r.programs.get("passes/tiles.vert", "passes/composite.frag", TWO_SURFACES=1,
-                                        TILE=SILHOUETTE_TILE, HELD_NEAR=int(held), **defines))
-            set_uniforms(progs[-1], {"uViewport": np.array(f.targets.size, dtype=float), "uTileCols": g.tiles.width})
+                                        TILE=SILHOUETTE_TILE, HELD_NEAR=0, **defines))
+            set_uniforms(progs[-1], tiled)
         uniforms = {
             "uFwd": v.fwd, "uRight": v.right, "uUp": v.up,
             "uFogColor": np.array(srgb_to_linear(look.fog_color)),
@@ -112,7 +119,27 @@ class CompositePass(Pass):
             tiles, count = g.silhouette_tiles(r.ctx)
             if count:
                 tiles.use(TEX["uTiles"])
-                r.programs.draw(progs[-1], moderngl.TRIANGLES, vertices=6, instances=count)
+                if held:
+                    self._held_far(r, f, progs[-1], scatter, target, count, mode)
+                else:
+                    r.programs.draw(progs[-1], moderngl.TRIANGLES, vertices=6, instances=count)
+
+    @staticmethod
+    def _held_far(r, f, compact, scatter, target, runs: int, mode: int) -> None:
+        """The held composite's pixels with two surfaces: drawn packed into the held fog's
+        list of them (render/targets.py HeldFog.far_pixels), every lane one of them, then
+        copied into `target` over the `runs` of silhouette tiles (passes/far_scatter.frag)."""
+        h = f.held_fog
+        if not h.far_pixels(r.ctx, f.gbuffer):
+            return
+        fbo, packed = h.far_target(r.ctx, "f2" if mode == BLUR_MODES["separate"] else "f1")
+        h.far_list.use(TEX["uFarList"])
+        fbo.use()
+        r.programs.draw(compact, moderngl.TRIANGLES)
+        target.use()
+        h.far_index.use(TEX["uFarIndex"])
+        packed.use(TEX["uFarOut"])
+        r.programs.draw(scatter, moderngl.TRIANGLES, vertices=6, instances=runs)
 
     @staticmethod
     def _held_draws(r, h, target, smooth, kept) -> None:

@@ -8,8 +8,10 @@
 // Defined by the renderer: FOG_SCALE (1, 2, 4), BLUR_MODE (0 off, 1 fused here,
 // 2 separate passes follow), SUN_LIGHT (1: the G-buffer has the direct sunlight, to be
 // dimmed by the fog toward the sun), TWO_SURFACES (0: every pixel's near surface;
-// 1: a second draw that redoes the pixels with a far surface, both mixed) and HELD_NEAR
-// (1: the near surface from the held composite's inputs, render/passes/composite.py).
+// 1: a second draw that redoes the pixels with a far surface, both mixed), HELD_NEAR
+// (1: the near surface from the held composite's inputs, render/passes/composite.py) and
+// COMPACT (1, with both: over a target that lists the two-surface pixels, FAR_LIST_WIDTH a
+// row, render/targets.py HeldFog.far_pixels; passes/far_scatter.frag puts them in place).
 // packHalf2x16 / unpackHalf2x16 (core from GLSL 4.20): the held inputs' AB
 #extension GL_ARB_shading_language_packing : require
 #include "common/camera.glsl"
@@ -31,6 +33,9 @@ uniform vec3 uFwd, uRight, uUp;
 uniform float uSkyAffect;         // the share of its fog a sky pixel shows (Godot's sky affect)
 uniform float uBlurSigma;         // px at full fog
 uniform float uBlurExponent;
+#if COMPACT
+uniform isampler2D uFarList;      // the two-surface pixels' coordinates (its padding repeats the last)
+#endif
 layout(location = 0) out vec4 fColor;
 
 // Gawron Table 1: the 5x5 Gaussian kernel with sigma = 1 (weights sum to ~1).
@@ -129,17 +134,25 @@ vec4 fogged(ivec2 px, vec3 scene, vec3 sunlight, float invd, vec3 w, vec2 full, 
 }
 
 void main() {
+    vec2 full = vec2(textureSize(uColor, 0));
+#if COMPACT
+    ivec2 px = texelFetch(uFarList, ivec2(gl_FragCoord.xy), 0).xy;
+    vec2 uv = (vec2(px) + 0.5) / full;
+#else
     ivec2 px = ivec2(gl_FragCoord.xy);
+    vec2 uv = vUV;
+#endif
 #if TWO_SURFACES
+    vec4 far = texelFetch(uFarColor, px, 0);
+#if !COMPACT
     // The second draw, over the pixels that see two surfaces only (about 1%): the others
     // leave at once. A branch would not do: llvmpipe runs both sides of every branch
     // under a lane mask, so the far surface's work would cost every pixel (the
     // composite took twice as long); a discard that kills every lane ends the shader.
-    vec4 far = texelFetch(uFarColor, px, 0);
     if (far.a >= 1.0) discard;
 #endif
-    vec2 full = vec2(textureSize(uColor, 0));
-    vec3 w = viewRay(vUV * 2.0 - 1.0, uFwd, uRight, uUp);
+#endif
+    vec3 w = viewRay(uv * 2.0 - 1.0, uFwd, uRight, uUp);
 #if HELD_NEAR
     vec4 c = heldNear(px);   // over a held fog, its kept inputs (passes/composite_held.glsl)
 #else
