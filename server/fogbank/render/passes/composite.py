@@ -47,7 +47,8 @@ class CompositePass(Pass):
     fog's moving texels (passes/composite_held.frag): by the kept depth-aware weights on
     the tiles that need them (passes/held_edges.frag), bilinearly on the others (the two
     draws split by a depth test against those marks: llvmpipe skips a 4x4 block that fails
-    it; a branch would run both sides)."""
+    it; a branch would run both sides); its pixels with two surfaces are drawn packed and
+    copied into place (_held_far)."""
     name = "composite"
     reads = ("gbuffer.color", "gbuffer.invdist", "gbuffer.sunlight", "gbuffer.far", "gbuffer.tiles",
              "gbuffer.held", "fog", "view")
