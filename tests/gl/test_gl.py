@@ -43,3 +43,17 @@ def test_llvmpipe_runs_the_threads_asked_for_and_lp_num_threads_wins():
     assert got["raster"] == raster_threads()
     assert _probe("'egl', None, 5", env)["raster"] == 5
     assert _probe("'egl', None, 5", {**env, "LP_NUM_THREADS": "3"})["raster"] == 3
+
+
+def test_a_context_without_the_packing_extension_is_refused_by_name(renderer):
+    """GL 3.3 without GL_ARB_shading_language_packing (core from 4.2) cannot compile the
+    held composite: create_context says so at start. This context (4.5) passes; one that
+    reports 3.3 and lacks the extension is refused, naming it."""
+    from types import SimpleNamespace
+
+    from fogbank.render.gl import check_extensions
+    check_extensions(renderer.ctx)
+    old = SimpleNamespace(version_code=330, extensions={"GL_ARB_texture_gather"}, info={"GL_RENDERER": "old"})
+    with pytest.raises(RuntimeError, match="GL_ARB_shading_language_packing"):
+        check_extensions(old)
+    check_extensions(SimpleNamespace(version_code=330, extensions={"GL_ARB_shading_language_packing"}, info={}))

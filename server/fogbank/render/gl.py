@@ -40,9 +40,26 @@ def create_context(backend: str = "auto", device: int | None = None, threads: in
     a GPU ignores it."""
     os.environ.setdefault("LP_NUM_THREADS", str(threads or raster_threads()))
     if backend == "default":
-        return moderngl.create_context(standalone=True, require=330)
-    kwargs = {"device_index": device} if device is not None else {}
-    return moderngl.create_context(standalone=True, backend="egl", require=330, **kwargs)
+        ctx = moderngl.create_context(standalone=True, require=330)
+    else:
+        kwargs = {"device_index": device} if device is not None else {}
+        ctx = moderngl.create_context(standalone=True, backend="egl", require=330, **kwargs)
+    check_extensions(ctx)
+    return ctx
+
+
+# GL 3.3 with these (core in later versions; every GL 4 driver and Mesa's llvmpipe have
+# them): the held composite packs its inputs as halves (passes/composite_inputs.frag)
+REQUIRED_EXTENSIONS = {"GL_ARB_shading_language_packing": 420}
+
+
+def check_extensions(ctx: moderngl.Context) -> None:
+    """Fail at start, naming what is missing, rather than at a stream's first held frame."""
+    missing = [name for name, core in REQUIRED_EXTENSIONS.items()
+               if ctx.version_code < core and name not in ctx.extensions]
+    if missing:
+        raise RuntimeError(f"the GL context ({ctx.info.get('GL_RENDERER')}, {ctx.version_code}) lacks "
+                           f"{', '.join(missing)}, which fogbank's shaders need")
 
 
 def set_uniform(prog, name: str, value) -> None:
