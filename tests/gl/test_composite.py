@@ -243,7 +243,9 @@ def test_held_two_surface_pixels_are_listed_and_composited_in_place(renderer, bl
     assert np.array_equal(index[ys, xs], np.arange(n))
     with_far = h.nbytes()
     far_index, h.far_index = h.far_index, None
-    assert with_far - h.nbytes() == s.width * s.height * 4 + len(listed) * 16
+    out = {"off": 4, "separate": 8}[blur]   # RGBA8 for the output, RGBA16F before the blur
+    assert set(h.far_out) == {"f1" if blur == "off" else "f2"}
+    assert with_far - h.nbytes() == s.width * s.height * 4 + len(listed) * (8 + out)
     h.far_index = far_index
     renderer.drop_slot("full-far")
     full = renderer.render(s, "full-far", True).astype(int)

@@ -39,10 +39,11 @@ HELD_DIRECT_BPP = 4
 HELD_INPUTS_BPP = 16 + 8
 HELD_EDGES_BPP = 4
 # the held composite's two-surface pixels (HeldFog.far_pixels): an R32I index per pixel, and
-# per listed pixel its RG32I coordinates and its composite (RGBA8, or RGBA16F before the
-# separate blur)
+# per listed pixel its RG32I coordinates and its composite, by its dtype (RGBA8 for the
+# output, RGBA16F before the separate blur)
 HELD_FAR_INDEX_BPP = 4
-HELD_FAR_LISTED_BPP = 8 + 8
+HELD_FAR_LIST_BPP = 8
+HELD_FAR_OUT_BPP = {"f1": 4, "f2": 8}
 FAR_LIST_WIDTH = 256   # texels a row of HeldFog.far_list
 
 
@@ -237,7 +238,8 @@ class HeldFog:
         n *= HELD_FOG_BPP * (2 if self.filtered else 1) + (HELD_DIRECT_BPP if self.direct else 0)
         if self.far_index is not None:
             n += self.far_index.width * self.far_index.height * HELD_FAR_INDEX_BPP
-            n += self.far_list.width * self.far_list.height * HELD_FAR_LISTED_BPP
+            listed = self.far_list.width * self.far_list.height
+            n += listed * (HELD_FAR_LIST_BPP + sum(HELD_FAR_OUT_BPP[d] for d in self.far_out))
         if self.inputs is not None:
             n += self.inputs.width * self.inputs.height * HELD_INPUTS_BPP
         if self.edges is not None:
