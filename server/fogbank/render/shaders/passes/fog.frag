@@ -90,7 +90,13 @@ void main() {
     vec2 t = fogViewDepths(vec3(0.0), ft.w, d);
     float sunTau = 0.0;
 #ifdef SUN_THROUGH_FOG
-    if (ft.invd > 0.0) sunTau = fogDepths(ft.w * d, uSunDir, uSkyDistance).x;
+    // toward the sun from a surface (the sky's is not used). Integrated for every texel
+    // and then picked: llvmpipe runs a branch's body under a lane mask whenever one lane
+    // takes it, with each assignment a masked store, which cost more than the sky texels'
+    // work saved (the default look's 720p fog pass 13.8 -> 13.1 ms, its held stage 2 4.2
+    // -> 3.9 ms, the same texels).
+    float surfaceSunTau = fogDepths(ft.w * d, uSunDir, uSkyDistance).x;
+    if (ft.invd > 0.0) sunTau = surfaceSunTau;
 #endif
     float lit = 1.0;
 #ifdef SHAFTS
@@ -107,13 +113,15 @@ void main() {
 #endif
     float sunT = 1.0;
 #ifdef SUN_THROUGH_FOG
-    if (ft.invd > 0.0) sunT = fogSunFromDepth(fogDepths(ft.w * d, uSunDir, uSkyDistance).x + held.b);
+    float surfaceSunT = fogSunFromDepth(fogDepths(ft.w * d, uSunDir, uSkyDistance).x + held.b);
+    if (ft.invd > 0.0) sunT = surfaceSunT;   // picked, not branched: as in stage 1
 #endif
     fOut = vec4(fogFromDepths(t, d), ft.invd, sunT, held.a);
 #else
     float sunT = 1.0;
 #ifdef SUN_THROUGH_FOG
-    if (ft.invd > 0.0) sunT = fogSunTransmittance(ft.w * d, uSunDir, uSkyDistance);
+    float surfaceSunT = fogSunTransmittance(ft.w * d, uSunDir, uSkyDistance);
+    if (ft.invd > 0.0) sunT = surfaceSunT;   // picked, not branched: as in stage 1
 #endif
     float lit = 1.0;
 #ifdef SHAFTS
