@@ -196,29 +196,28 @@ class HeldFog:
             self.edges_key = None
         return self.edges
 
-    def far_pixels(self, ctx: moderngl.Context, g: "GBuffer") -> int:
-        """List the scene pass's pixels with two surfaces (far_color's coverage below 1),
-        once per held fog: the held composite draws them packed into FAR_LIST_WIDTH-wide
-        rows (passes/composite.frag COMPACT), every lane a pixel with two surfaces, then
-        copies each to its place (passes/far_scatter.frag). Drawn where they lie, over the
+    def far_pixels(self, ctx: moderngl.Context, marks: np.ndarray) -> int:
+        """List its scene pass's pixels with two surfaces, `marks` (height, width), nonzero
+        where the near coverage is below 1 (passes/far_mask.frag; drawn once per held
+        fog): the held composite draws them packed into FAR_LIST_WIDTH-wide rows
+        (passes/composite.frag COMPACT), every lane a pixel with two surfaces, then copies
+        each to its place (passes/far_scatter.frag). Drawn where they lie, over the
         silhouette tiles, two of three of llvmpipe's lanes ran for pixels of one surface (at
         1280x720 of the default look, 8084 such pixels in 2362 tiles fill 3073 groups of 8
         lanes). Returns how many; the list's padding repeats its last pixel."""
-        if self.far_count >= 0:
-            return self.far_count
-        w, h = g.far_color.size
-        cover = np.frombuffer(g.far_color.read(), np.float16).reshape(h, w, 4)[..., 3]
-        ys, xs = np.nonzero(cover < 1.0)
-        n = len(xs)
-        index = np.full((h, w), -1, np.int32)
-        index[ys, xs] = np.arange(n, dtype=np.int32)
-        self.far_index = ctx.texture((w, h), 1, dtype="i4", data=index.tobytes())
+        h, w = marks.shape
+        flat = np.flatnonzero(marks)   # row by row, left to right
+        n = len(flat)
+        ys, xs = np.divmod(flat, w)
+        index = np.full(h * w, -1, np.int32)
+        index[flat] = np.arange(n, dtype=np.int32)
+        self.far_index = ctx.texture((w, h), 1, dtype="i4", data=index)
         rows = max(1, -(-n // FAR_LIST_WIDTH))
         coords = np.zeros((rows * FAR_LIST_WIDTH, 2), np.int32)
         if n:
             coords[:n] = np.stack([xs, ys], axis=1)
             coords[n:] = coords[n - 1]
-        self.far_list = ctx.texture((FAR_LIST_WIDTH, rows), 2, dtype="i4", data=coords.tobytes())
+        self.far_list = ctx.texture((FAR_LIST_WIDTH, rows), 2, dtype="i4", data=coords)
         for t in (self.far_index, self.far_list):
             t.filter = (moderngl.NEAREST, moderngl.NEAREST)
         self.far_count = n

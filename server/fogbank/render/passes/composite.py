@@ -131,7 +131,9 @@ class CompositePass(Pass):
         list of them (render/targets.py HeldFog.far_pixels), every lane one of them, then
         copied into `target` over the `runs` of silhouette tiles (passes/far_scatter.frag)."""
         h = f.held_fog
-        if not h.far_pixels(r.ctx, f.gbuffer):
+        if h.far_count < 0:
+            h.far_pixels(r.ctx, CompositePass._far_marks(r, f.gbuffer))
+        if not h.far_count:
             return
         fbo, packed = h.far_target(r.ctx, "f2" if mode == BLUR_MODES["separate"] else "f1")
         h.far_list.use(TEX["uFarList"])
@@ -141,6 +143,22 @@ class CompositePass(Pass):
         h.far_index.use(TEX["uFarIndex"])
         packed.use(TEX["uFarOut"])
         r.programs.draw(scatter, moderngl.TRIANGLES, vertices=6, instances=runs)
+
+    @staticmethod
+    def _far_marks(r, g) -> np.ndarray:
+        """(height, width) uint8, nonzero where a pixel sees two surfaces
+        (passes/far_mask.frag), read back."""
+        ctx, (w, h) = r.ctx, g.far_color.size
+        marks = ctx.texture((w, h), 1)
+        fbo = ctx.framebuffer(color_attachments=[marks])
+        fbo.use()
+        g.far_color.use(TEX["uFarColor"])
+        r.programs.draw(r.programs.get(FULLSCREEN, "passes/far_mask.frag"), moderngl.TRIANGLES)
+        out = np.frombuffer(fbo.read(components=1, alignment=1), np.uint8).reshape(h, w)
+        r.caches.park()   # never release the bound framebuffer
+        fbo.release()
+        marks.release()
+        return out
 
     @staticmethod
     def _held_draws(r, h, target, smooth, kept) -> None:
