@@ -213,7 +213,8 @@ def test_held_frames_across_the_domain_equal_the_full_composite(renderer, case):
 def test_held_two_surface_pixels_are_listed_and_composited_in_place(renderer, blur):
     """The held composite draws the pixels with two surfaces packed (HeldFog.far_pixels)
     and copies them into place: the list holds exactly the pixels whose near coverage is
-    below 1, each once, its padding a listed pixel, the index inverts it, the bytes count;
+    below 1, each once, its padding a listed pixel, each tile's first place and mask find
+    every pixel's place in it, the bytes count;
     and at those pixels the held frame is the full composite's within a level (without
     the copy, 53-66 levels off)."""
     from fogbank.model.presets import preset_dict
@@ -238,15 +239,24 @@ def test_held_two_surface_pixels_are_listed_and_composited_in_place(renderer, bl
     xs, ys = listed[:n, 0], listed[:n, 1]
     assert bool(two[ys, xs].all()) and len(set(zip(xs.tolist(), ys.tolist()))) == n
     assert bool(two[listed[n:, 1], listed[n:, 0]].all())   # the padding repeats a listed pixel
-    index = np.frombuffer(h.far_index.read(), np.int32).reshape(s.height, s.width)
-    assert bool((index[~two] == -1).all())
-    assert np.array_equal(index[ys, xs], np.arange(n))
+    # each tile's (first place, mask): a listed pixel's place is the first plus the tile's
+    # listed pixels before it (far_scatter.frag), the mask is the tile's two-surface pixels
+    tiles = np.frombuffer(h.far_tiles.read(), np.int32).reshape(h.far_tiles.height, h.far_tiles.width, 2)
+    for i, (x, y) in enumerate(zip(xs.tolist(), ys.tolist())):
+        first, mask = tiles[y // 4, x // 4]
+        k = (y % 4) * 4 + x % 4
+        assert (mask >> k) & 1 == 1 and first + bin(int(mask) & ((1 << k) - 1)).count("1") == i
+    for ty in range(tiles.shape[0]):
+        for tx in range(tiles.shape[1]):
+            block = two[ty * 4:ty * 4 + 4, tx * 4:tx * 4 + 4]
+            bits = sum(1 << (r * 4 + c) for r, c in zip(*np.nonzero(block)))
+            assert int(tiles[ty, tx, 1]) == bits
     with_far = h.nbytes()
-    far_index, h.far_index = h.far_index, None
+    far_tiles, h.far_tiles = h.far_tiles, None
     out = {"off": 4, "separate": 8}[blur]   # RGBA8 for the output, RGBA16F before the blur
     assert set(h.far_out) == {"f1" if blur == "off" else "f2"}
-    assert with_far - h.nbytes() == s.width * s.height * 4 + len(listed) * (8 + out)
-    h.far_index = far_index
+    assert with_far - h.nbytes() == -(-s.width // 4) * -(-s.height // 4) * 8 + len(listed) * (8 + out)
+    h.far_tiles = far_tiles
     renderer.drop_slot("full-far")
     full = renderer.render(s, "full-far", True).astype(int)
     renderer.drop_slot("full-far")

@@ -38,13 +38,16 @@ HELD_DIRECT_BPP = 4
 # (passes/held_edges.frag)
 HELD_INPUTS_BPP = 16 + 8
 HELD_EDGES_BPP = 4
-# the held composite's two-surface pixels (HeldFog.far_pixels): an R32I index per pixel, and
-# per listed pixel its RG32I coordinates and its composite, by its dtype (RGBA8 for the
-# output, RGBA16F before the separate blur)
-HELD_FAR_INDEX_BPP = 4
+# the held composite's two-surface pixels (HeldFog.far_pixels): per SILHOUETTE_TILE tile an
+# RG32I (its first pixel's place in the list, a mask of its pixels listed), and per listed
+# pixel its RG32I coordinates and its composite, by its dtype (RGBA8 for the output,
+# RGBA16F before the separate blur)
+HELD_FAR_TILE_BYTES = 8
 HELD_FAR_LIST_BPP = 8
 HELD_FAR_OUT_BPP = {"f1": 4, "f2": 8}
 FAR_LIST_WIDTH = 256   # texels a row of HeldFog.far_list
+# the set bits of each 16-bit mask (a 4x4 tile's listed pixels)
+_BIT_COUNTS = np.unpackbits(np.arange(1 << 16, dtype="<u2").view(np.uint8)).reshape(-1, 16).sum(axis=1, dtype=np.uint8)
 
 
 def fog_texture(ctx: moderngl.Context, size: tuple[int, int]) -> moderngl.Texture:
@@ -169,10 +172,10 @@ class HeldFog:
     edges: moderngl.Renderbuffer | None = None
     edges_key: object = None
     # its scene pass's pixels with two surfaces (far_pixels): their coordinates, listed
-    # FAR_LIST_WIDTH a row; each pixel's place in that list (-1: one surface); how many; and
+    # FAR_LIST_WIDTH a row; by tile, where its pixels are in that list; how many; and
     # their composite, by output dtype ("f1" or "f2"; HeldFog.far_target)
     far_list: moderngl.Texture | None = None
-    far_index: moderngl.Texture | None = None
+    far_tiles: moderngl.Texture | None = None
     far_count: int = -1
     far_out: dict = field(default_factory=dict)
 
@@ -206,20 +209,35 @@ class HeldFog:
         1280x720 of the default look, 8084 such pixels in 2362 tiles fill 3073 groups of 8
         lanes). Returns how many; the list's padding repeats its last pixel."""
         h, w = marks.shape
-        flat = np.flatnonzero(marks)   # row by row, left to right
+        t = SILHOUETTE_TILE
+        assert t * t <= 31   # a tile's pixels are bits of one int
+        rows_t, cols_t = -(-h // t), -(-w // t)
+        padded = marks != 0
+        if padded.shape != (rows_t * t, cols_t * t):   # partial tiles at the right and top
+            padded = np.pad(padded, ((0, rows_t * t - h), (0, cols_t * t - w)))
+        # (tile row, tile column, pixel in the tile row by row): listed in that order, so a
+        # tile's pixels follow its first, and a pixel's place is the tile's first place plus
+        # the tile's listed pixels before it (passes/far_scatter.frag)
+        tiles = padded.reshape(rows_t, t, cols_t, t).transpose(0, 2, 1, 3).reshape(rows_t, cols_t, t * t)
+        flat = np.flatnonzero(tiles)
         n = len(flat)
-        ys, xs = np.divmod(flat, w)
-        index = np.full(h * w, -1, np.int32)
-        index[flat] = np.arange(n, dtype=np.int32)
-        self.far_index = ctx.texture((w, h), 1, dtype="i4", data=index)
+        tile, k = np.divmod(flat, t * t)
+        ty, tx = np.divmod(tile, cols_t)
+        xs, ys = tx * t + k % t, ty * t + k // t
+        bits = np.packbits(tiles, axis=2, bitorder="little").view("<u2")[..., 0]
+        counts = _BIT_COUNTS[bits].astype(np.int32)
+        per_tile = np.empty((rows_t, cols_t, 2), np.int32)
+        per_tile[..., 0] = np.cumsum(counts, dtype=np.int32).reshape(rows_t, cols_t) - counts
+        per_tile[..., 1] = bits
+        self.far_tiles = ctx.texture((cols_t, rows_t), 2, dtype="i4", data=per_tile)
         rows = max(1, -(-n // FAR_LIST_WIDTH))
         coords = np.zeros((rows * FAR_LIST_WIDTH, 2), np.int32)
         if n:
             coords[:n] = np.stack([xs, ys], axis=1)
             coords[n:] = coords[n - 1]
         self.far_list = ctx.texture((FAR_LIST_WIDTH, rows), 2, dtype="i4", data=coords)
-        for t in (self.far_index, self.far_list):
-            t.filter = (moderngl.NEAREST, moderngl.NEAREST)
+        for tex in (self.far_tiles, self.far_list):
+            tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
         self.far_count = n
         return n
 
@@ -235,8 +253,8 @@ class HeldFog:
     def nbytes(self) -> int:
         n = self.sums.width * self.sums.height
         n *= HELD_FOG_BPP * (2 if self.filtered else 1) + (HELD_DIRECT_BPP if self.direct else 0)
-        if self.far_index is not None:
-            n += self.far_index.width * self.far_index.height * HELD_FAR_INDEX_BPP
+        if self.far_tiles is not None:
+            n += self.far_tiles.width * self.far_tiles.height * HELD_FAR_TILE_BYTES
             listed = self.far_list.width * self.far_list.height
             n += listed * (HELD_FAR_LIST_BPP + sum(HELD_FAR_OUT_BPP[d] for d in self.far_out))
         if self.inputs is not None:
@@ -252,12 +270,12 @@ class HeldFog:
         release_fbo(self.inputs)
         if self.edges is not None:
             self.edges.release()
-        for t in (self.far_index, self.far_list):
+        for t in (self.far_tiles, self.far_list):
             if t is not None:
                 t.release()
         for fbo, _ in self.far_out.values():
             release_fbo(fbo)
-        self.inputs = self.edges = self.far_index = self.far_list = None
+        self.inputs = self.edges = self.far_tiles = self.far_list = None
         self.far_out.clear()
         self.far_count = -1
 

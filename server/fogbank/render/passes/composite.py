@@ -129,7 +129,8 @@ class CompositePass(Pass):
     def _held_far(r, f, compact, scatter, target, runs: int, mode: int) -> None:
         """The held composite's pixels with two surfaces: drawn packed into the held fog's
         list of them (render/targets.py HeldFog.far_pixels), every lane one of them, then
-        copied into `target` over the `runs` of silhouette tiles (passes/far_scatter.frag)."""
+        copied into `target` over the `runs` of silhouette tiles (passes/far_scatter.frag,
+        which finds each pixel's place from its tile's first place and mask)."""
         h = f.held_fog
         if h.far_count < 0:
             h.far_pixels(r.ctx, CompositePass._far_marks(r, f.gbuffer))
@@ -140,7 +141,7 @@ class CompositePass(Pass):
         fbo.use()
         r.programs.draw(compact, moderngl.TRIANGLES)
         target.use()
-        h.far_index.use(TEX["uFarIndex"])
+        h.far_tiles.use(TEX["uFarTiles"])
         packed.use(TEX["uFarOut"])
         r.programs.draw(scatter, moderngl.TRIANGLES, vertices=6, instances=runs)
 
