@@ -48,15 +48,15 @@ def create_context(backend: str = "auto", device: int | None = None, threads: in
     return ctx
 
 
-# GL 3.3 with these (core in later versions; every GL 4 driver and Mesa's llvmpipe have
-# them): the held composite packs its inputs as halves (passes/composite_inputs.frag)
-REQUIRED_EXTENSIONS = {"GL_ARB_shading_language_packing": 420}
+# GL 3.3 with these (core in later GL versions, and listed by every GL 4 driver and Mesa's
+# llvmpipe): the held composite packs its inputs as halves (passes/composite_inputs.frag).
+# The shaders are GLSL 3.30 and name the extension, so a later context must list it too.
+REQUIRED_EXTENSIONS = ("GL_ARB_shading_language_packing",)
 
 
 def check_extensions(ctx: moderngl.Context) -> None:
     """Fail at start, naming what is missing, rather than at a stream's first held frame."""
-    missing = [name for name, core in REQUIRED_EXTENSIONS.items()
-               if ctx.version_code < core and name not in ctx.extensions]
+    missing = [name for name in REQUIRED_EXTENSIONS if name not in ctx.extensions]
     if missing:
         raise RuntimeError(f"the GL context ({ctx.info.get('GL_RENDERER')}, {ctx.version_code}) lacks "
                            f"{', '.join(missing)}, which fogbank's shaders need")
