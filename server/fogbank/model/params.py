@@ -115,6 +115,13 @@ class Effects(Strict):
         False, json_schema_extra=grouped("Light"), description="dim the sunlight on each surface by the fog between it and the sun: "
                            "the density layers' closed forms along the sun's direction for "
                            "sky_distance metres (shadows soften under dense fog)")
+    exposure: float = num(0.0, -10, 10, 0.1, "EV", "exposure in stops: the linear image is scaled by 2^EV "
+                          "before the tone map", group="Light")
+    tone_map: Literal["none", "neutral", "agx"] = Field(
+        "none", json_schema_extra=grouped("Light"), description="how linear HDR light becomes the 8-bit image: "
+        "'none' clips at 1 (the papers' output), 'neutral' the Khronos PBR Neutral curve (colours kept up to "
+        "0.76, highlights rolled off toward white without a hue shift), 'agx' Troy Sobotka's AgX (Blender 4's "
+        "filmic default: a gentle S-curve that desaturates toward white)")
     blur: Literal["off", "single", "separate"] = Field(
         "off", json_schema_extra=grouped("Blur"), description="fog blur: off, fused with the composite, or separate passes")
     blur_radius: float = num(3.0, 0, 16, 0.25, "px", "Gaussian sigma at full fog (at 720 px high)", group="Blur")

@@ -18,7 +18,7 @@ import numpy as np
 from fogbank.render.frame import Frame, Simulations, plan_fog
 from fogbank.render.gl import create_context  # noqa: F401  (the worker's entry point)
 from fogbank.render.passes import FRAME_PASSES
-from fogbank.render.programs import FULLSCREEN, Programs
+from fogbank.render.programs import Programs
 from fogbank.render.rays import RayCaster
 from fogbank.render.passes.shadow import sun_key
 from fogbank.render.resources import Meshes, NoiseTiles, ShadowMaps, particle_texture
@@ -37,7 +37,6 @@ class Renderer:
         self.terrain_prog = self.programs.get("passes/scene.vert", "passes/scene.frag", TERRAIN=1)
         self.shadow_prog = self.programs.get("passes/shadow.vert", "passes/shadow.frag")
         self.lightmap_prog = self.programs.get("passes/lightmap.vert", "passes/lightmap.frag")
-        self.blur_prog = self.programs.get(FULLSCREEN, "passes/blur.frag")
         self.meshes = Meshes(ctx, self.terrain_prog, self.scene_prog, self.shadow_prog, self.lightmap_prog)
         self.shadows = ShadowMaps(ctx)
         self.noise = NoiseTiles(ctx)

@@ -9,6 +9,8 @@ import moderngl
 from fogbank.render.gl import TEX, set_uniforms
 from fogbank.render.passes.base import Pass
 from fogbank.render.passes.composite import blur_sigma
+from fogbank.render.passes.output import output_defines, output_uniforms
+from fogbank.render.programs import FULLSCREEN
 
 
 class BlurPass(Pass):
@@ -21,8 +23,9 @@ class BlurPass(Pass):
         if e.blur != "separate":
             return
         (_, ta), (fb, tb) = f.targets.linear_pair()
-        prog = r.blur_prog
-        set_uniforms(prog, {"uBlurSigma": blur_sigma(f), "uBlurExponent": e.blur_exponent})
+        prog = r.programs.get(FULLSCREEN, "passes/blur.frag", **output_defines(f.still))
+        set_uniforms(prog, {"uBlurSigma": blur_sigma(f), "uBlurExponent": e.blur_exponent,
+                            **output_uniforms(f.still)})
         for src, dst, direction, final in ((ta, fb, (1.0, 0.0), False), (tb, f.targets.out, (0.0, 1.0), True)):
             dst.use()
             src.use(TEX["uImage"])

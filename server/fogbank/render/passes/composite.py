@@ -11,12 +11,13 @@ import numpy as np
 from fogbank.model.fields import srgb_to_linear
 from fogbank.render.gl import TEX, set_uniforms
 from fogbank.render.passes.base import Pass
+from fogbank.render.passes.output import output_defines, output_uniforms
 from fogbank.render.passes.sky import sun_color
 from fogbank.render.programs import FULLSCREEN
 from fogbank.render.targets import FAR_LIST_WIDTH, SILHOUETTE_TILE
 
 BLUR_MODES = {"off": 0, "single": 1, "separate": 2}
-HELD_UNIFORMS = ("uFogColor", "uScatterColor", "uMaxOpacity")
+HELD_UNIFORMS = ("uFogColor", "uScatterColor", "uMaxOpacity", "uExposureScale")
 # A held composite's 4x4 tile blends its fog bilinearly unless a pixel's kept depth-aware
 # weight differs from its bilinear one by more than this (passes/held_edges.frag). At
 # 1280x720 of the default look 0.01 leaves 16% of the tiles to the kept weights (0.002:
@@ -59,7 +60,7 @@ class CompositePass(Pass):
         mode = BLUR_MODES[e.blur]
         sun = f.gbuffer.sunlight is not None
         g = f.gbuffer
-        defines = dict(FOG_SCALE=e.fog_scale, BLUR_MODE=mode, SUN_LIGHT=int(sun))
+        defines = dict(FOG_SCALE=e.fog_scale, BLUR_MODE=mode, SUN_LIGHT=int(sun), **output_defines(look))
         held = f.held_fog is not None and mode != BLUR_MODES["single"]
         smooth = held and e.fog_scale > 1   # the held composite's bilinear draw
         if held:
@@ -91,7 +92,7 @@ class CompositePass(Pass):
             "uScatterExponent": e.scatter_exponent, "uBlurSigma": blur_sigma(f),
             "uPhaseHG": e.phase == "henyey-greenstein", "uAnisotropy": e.anisotropy,
             "uShafts": e.shafts,
-            "uMaxOpacity": e.max_opacity, "uBlurExponent": e.blur_exponent}
+            "uMaxOpacity": e.max_opacity, "uBlurExponent": e.blur_exponent, **output_uniforms(look)}
         for i, prog in enumerate(progs):
             # the held composite reads only the colours and the max opacity per frame
             set_uniforms(prog, {k: uniforms[k] for k in HELD_UNIFORMS} if i < n_held else uniforms)

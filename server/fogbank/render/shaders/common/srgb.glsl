@@ -12,11 +12,12 @@ vec3 linearToSrgb(vec3 c) {
     return mix(c * 12.92, curve, step(0.0031308, c));
 }
 
-// The 8-bit output: sRGB-encoded, dithered by up to half a level either way with
+// The 8-bit output: exposed and tone mapped (common/tonemap.glsl), sRGB-encoded, dithered by up to half a level either way with
 // interleaved gradient noise at the pixel px (common/dither.glsl), so that smooth
 // gradients (the sky round the sun) average to their true value instead of banding into
 // 1-level rings.
 #include "common/dither.glsl"
+#include "common/tonemap.glsl"
 vec3 outputColor(vec3 linear, vec2 px) {
-    return linearToSrgb(linear) + (interleavedGradientNoise(px) - 0.5) / 255.0;
+    return linearToSrgb(toneMap(linear)) + (interleavedGradientNoise(px) - 0.5) / 255.0;
 }
