@@ -139,8 +139,12 @@ def draw_look(kind: str, rng, scale: str = "domain") -> FogParams:
     """A look with one layer of `kind`, every field of it and of the fog drawn from the
     model; the scene, camera, sun and bake keep their defaults (they do not enter T)."""
     layer = draw_model(LAYER_CLASSES[kind], rng, scale, fixed={"enabled": True, "kind": kind})
+    layers = [layer.model_dump(mode="json")]
+    if getattr(layer, "carve", 0) > 0:   # a carving body alone carves nothing: fog to carve goes with it
+        layers.insert(0, draw_model(LAYER_CLASSES["homogeneous"], rng, scale,
+                                    fixed={"enabled": True}).model_dump(mode="json"))
     fog = draw_model(FogParams, rng, scale, fixed={
-        "layers": [layer.model_dump(mode="json")], "scene": "calibration",
+        "layers": layers, "scene": "calibration",
         "camera": FogParams().camera.model_dump(mode="json"),
         "sun": FogParams().sun.model_dump(mode="json"),
         "noise": FogParams().noise.model_dump(mode="json")})

@@ -192,22 +192,23 @@ def body_frame(layer):
     return lambda x: to_body @ (np.asarray(x, dtype=np.float64) - c)
 
 
-def body_level(layer):
+def body_level(layer, inset: float = 0.0):
     """x -> < 0 inside the body, > 0 outside; convex along any line (the box's largest
-    excess over a half extent, the ellipsoid's r^2 - 1)."""
+    excess over a half extent, the ellipsoid's r^2 - 1). `inset`: the box's half extents
+    less that (m), the ellipsoid's r^2 level less that (a nested body: a shell or a fade)."""
     frame = body_frame(layer)
     if layer.kind == "box":
-        h = np.asarray(layer.half_size, dtype=np.float64)
+        h = np.asarray(layer.half_size, dtype=np.float64) - inset
         return lambda x: float(np.max(np.abs(frame(x)) - h))
     a = np.asarray(layer.radii, dtype=np.float64)
-    return lambda x: float(np.sum((frame(x) / a) ** 2) - 1.0)
+    return lambda x: float(np.sum((frame(x) / a) ** 2) - 1.0 + inset)
 
 
-def body_crossings(layer, O, w, d, iters=120) -> list[float]:
+def body_crossings(layer, O, w, d, iters=120, inset: float = 0.0) -> list[float]:
     """Where O + w s, s in [0, d], enters and leaves the body (O in the body's unslid
     frame): the convex level's minimum by golden sections, then its zeros by bisection."""
     O, w = np.asarray(O, dtype=np.float64), np.asarray(w, dtype=np.float64)
-    level = body_level(layer)
+    level = body_level(layer, inset)
 
     def f(s):
         return level(O + w * s)
@@ -233,18 +234,71 @@ def body_crossings(layer, O, w, d, iters=120) -> list[float]:
     return sorted(out)
 
 
+def body_chord(layer, Os, w, d, inset: float = 0.0):
+    """The segment (a, b) of Os + w s, s in [0, d], inside the (nested) body, or None."""
+    level = body_level(layer, inset)
+    edges = [0.0] + body_crossings(layer, Os, w, d, inset=inset) + [float(d)]
+    inside = [(a, b) for a, b in zip(edges[:-1], edges[1:]) if b > a and level(Os + w * (a + b) / 2) <= 0]
+    return (inside[0][0], inside[-1][1]) if inside else None
+
+
 def tau_body(layer, fog, O, w, d, time):
-    """A box's or an ellipsoid's optical depth (signed: a negative density carves)."""
+    """A box's or an ellipsoid's optical depth, its fade's kinks as the quadrature's points:
+    the box's rho times the product over its axes of clamp((h - |p|) / F, 0, 1) (kinks where
+    |p_i| = h_i - F), the ellipsoid's rho min(1, (1 - r^2)_+ / f) (kinks at r^2 = 1 - f). A
+    carving body has no density of its own (carved_tau)."""
+    if layer.carve > 0:
+        return 0.0
     Os = slid(layer, fog, O, time)
+    chord = body_chord(layer, Os, w, d)
+    if chord is None:
+        return 0.0
+    a, b = chord
+    frame = body_frame(layer)
+    if layer.kind == "box":
+        h = np.asarray(layer.half_size, dtype=np.float64)
+        F = layer.edge_fade * float(h.min())
+        if F <= 0:
+            return _quad(lambda s: layer.density, a, b)
+        p0, p1 = frame(Os + w * a), frame(Os + w * b)   # the frame is affine: p is linear in s
+        kinks = []
+        for i in range(3):
+            dp = (p1[i] - p0[i]) / (b - a) if b > a else 0.0
+            for target in (h[i] - F, -(h[i] - F)):
+                if dp != 0.0:
+                    kinks.append(a + (target - p0[i]) / dp)
+
+        def f(s):
+            p = np.abs(frame(Os + w * s))
+            return layer.density * float(np.prod(np.clip((h - p) / F, 0.0, 1.0)))
+        return _quad(f, a, b, kinks)
+    fade = layer.edge_fade
+    inner = body_crossings(layer, Os, w, d, inset=fade) if fade < 1.0 else []
     level = body_level(layer)
-    edges = [0.0] + body_crossings(layer, Os, w, d) + [float(d)]
+    return _quad(lambda s: layer.density * min(1.0, max(0.0, -level(Os + w * s)) / fade), a, b, inner)
+
+
+def carved_tau(fog, Os, w, ds, time, plain) -> float:
+    """What the carving bodies take from the density layers along the segment: each body's
+    carve / K times `plain` (the other density layers' optical depth) over each of its K
+    nested shells' chords, found here by bisection (box: half extents less (k + 1/2) / K of
+    the fade depth, K = 4, or 1 without a fade; ellipsoid: r^2 <= 1 - f (k + 1/2) / K, K = 4)."""
     total = 0.0
-    for a, b in zip(edges[:-1], edges[1:]):
-        if b > a and level(Os + w * (a + b) / 2) <= 0:
-            if layer.kind == "box":
-                total += _quad(lambda s: layer.density, a, b)
-            else:
-                total += _quad(lambda s: layer.density * max(0.0, -level(Os + w * s)), a, b)
+    for layer in fog.layers:
+        if not (layer.enabled and layer.kind in SIGNED and layer.carve > 0):
+            continue
+        Ob = slid(layer, fog, Os, time)
+        if layer.kind == "box":
+            F = layer.edge_fade * min(layer.half_size)
+            k_all = 4 if F > 0 else 1
+            insets = [F * (k + 0.5) / k_all for k in range(k_all)]
+        else:
+            k_all = 4
+            insets = [layer.edge_fade * (k + 0.5) / k_all for k in range(k_all)]
+        for inset in insets:
+            chord = body_chord(layer, Ob, w, ds, inset)
+            if chord is not None:
+                total += layer.carve / k_all * plain(Os + w * chord[0], w, chord[1] - chord[0])
     return total
 
 
@@ -308,7 +362,7 @@ def noise_line_integral(tex, O, w, d, scale):
 
 EXPONENTIAL = {"homogeneous": tau_homogeneous, "height": tau_height, "cosine": tau_cosine,
                "polynomial": tau_polynomial, "potential": tau_potential, "sphere": tau_sphere}
-SIGNED = {"box": tau_body, "ellipsoid": tau_body}   # may be negative (carving)
+SIGNED = {"box": tau_body, "ellipsoid": tau_body}   # bodies: a carving one removes fog (carved_tau)
 
 
 def particle_log_clarity(layer, state, O, w, d):
@@ -326,29 +380,20 @@ def particle_log_clarity(layer, state, O, w, d):
         return float(np.sum(np.log1p(-opacity)))
 
 
-def raw(fog, O, w, d, time, tex=None, states=None):
-    """(log of the optical depth of the exponential layers, log of the direct transmittances) along
-    the segment after the start distance, before the global density: or None where the
-    exact volume-noise integral is out of reach (more than MAX_PIECES cells)."""
-    O = np.asarray(O, dtype=np.float64)
-    w = np.asarray(w, dtype=np.float64)
-    e = fog.effects
-    Os = O + w * e.start_distance
-    ds = max(d - e.start_distance, 0.0)
+def plain_log_tau(fog, Os, w, ds, time, tex=None):
+    """The log of the density layers' optical depth over the segment Os + w s, s in [0,
+    ds], carving bodies left out, before the global density (None: a volume noise
+    integral out of reach)."""
     P = Os + w * ds
     tau = 0.0
     log_tau = -math.inf   # logs of optical depths that float64 cannot hold (height fog)
-    log_direct = 0.0
-    signed = 0.0          # optical depths that may be negative (carving bodies)
-    for i, layer in enumerate(fog.layers):
+    for layer in fog.layers:
         if not layer.enabled:
             continue
         if layer.kind == "height":
             log_tau = np.logaddexp(log_tau, tau_height(layer, fog, Os, w, ds, time))
-        elif layer.kind in EXPONENTIAL:
-            tau += EXPONENTIAL[layer.kind](layer, fog, Os, w, ds, time)
-        elif layer.kind in SIGNED:
-            signed += SIGNED[layer.kind](layer, fog, Os, w, ds, time)
+        elif layer.kind in EXPONENTIAL or layer.kind in SIGNED:
+            tau += {**EXPONENTIAL, **SIGNED}[layer.kind](layer, fog, Os, w, ds, time)
         elif layer.kind == "noise":
             if layer.mode == "volume":
                 integral = noise_line_integral(tex, slid(layer, fog, Os, time), w, ds, layer.scale)
@@ -361,7 +406,33 @@ def raw(fog, O, w, d, time, tex=None, states=None):
                     dy = (Os[1] - P[1]) / layer.falloff_scale
                     n = n * dy * dy / 2 + 0.001
                 tau += layer.density * ds * n
-        elif layer.kind == "distance":
+    return float(np.logaddexp(log_tau, math.log(tau) if tau > 0 else -math.inf))
+
+
+def raw(fog, O, w, d, time, tex=None, states=None):
+    """(log of the optical depth of the exponential layers, log of the direct transmittances,
+    what the carving bodies take away, <= 0) along the segment after the start distance,
+    before the global density: or None where the exact volume-noise integral is out of
+    reach (more than MAX_PIECES cells)."""
+    O = np.asarray(O, dtype=np.float64)
+    w = np.asarray(w, dtype=np.float64)
+    e = fog.effects
+    Os = O + w * e.start_distance
+    ds = max(d - e.start_distance, 0.0)
+    P = Os + w * ds
+    log_tau = plain_log_tau(fog, Os, w, ds, time, tex)
+    if log_tau is None:
+        return None
+
+    def plain(o, ww, dd):
+        lt = plain_log_tau(fog, o, ww, dd, time, tex)
+        return math.exp(min(lt, 700.0)) if lt is not None else 0.0
+    signed = -carved_tau(fog, Os, w, ds, time, plain)
+    log_direct = 0.0
+    for i, layer in enumerate(fog.layers):
+        if not layer.enabled or layer.kind in EXPONENTIAL or layer.kind in SIGNED or layer.kind in ("height", "noise"):
+            continue
+        if layer.kind == "distance":
             n = noise_at(tex, slid(layer, fog, P, time)[None, :], layer.noise_scale)[0]
             N = layer.low + (layer.high - layer.low) * n
             x = max(ds - layer.start, 0.0) / layer.distance
@@ -371,7 +442,7 @@ def raw(fog, O, w, d, time, tex=None, states=None):
             log_direct += particle_log_clarity(layer, states[i], Os, w, ds)
         else:
             raise AssertionError(f"no truth for layer kind {layer.kind!r}")
-    return float(np.logaddexp(log_tau, math.log(tau) if tau > 0 else -math.inf)), log_direct, signed
+    return log_tau, log_direct, signed
 
 
 def compose(fog, d, parts):
@@ -382,8 +453,8 @@ def compose(fog, d, parts):
     if e.cutoff_distance > 0 and d > e.cutoff_distance:   # Biri 4.2: the fog colour; or none
         return max(0.0, 1.0 - e.max_opacity) if e.cutoff_mode == "fog" else 1.0
     log_tau, log_direct, signed = parts
-    # the exponential layers' depth is kept at 0 or more (a carving body removes fog, never
-    # adds light); the direct layers (particles, distance fog) are not carved
+    # the exponential layers' depth less what the carving bodies take (kept at 0 or more:
+    # overlapping bodies remove their shares twice); the direct layers are not carved
     x = (max(math.exp(min(math.log(fog.density) + log_tau, 700.0)) + fog.density * signed, 0.0)
          - fog.density * log_direct)
     T = math.exp(-x) if math.isfinite(x) else 0.0

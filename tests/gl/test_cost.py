@@ -67,10 +67,11 @@ def test_first_draw_compile_is_charged_until_the_worker_has_drawn_the_program():
     distinct = [cost.jit_seconds(tuple(("cosine", (k,)) for k in range(1, n + 1))) for n in (2, 4, 8)]
     assert distinct == sorted(distinct) and distinct[-1] > same[0]
 
-def test_held_fog_leaves_out_the_layers_that_do_not_move_and_the_shafts():
-    """A stream's frame over a still camera, its time-invariant fog held by the worker
-    (render/passes/fog.py): the estimate keeps the moving layers (wind, drift, particles)
-    toward the eye and the sun, and leaves out the others, the shafts and their filter."""
+def test_held_fog_leaves_out_the_layers_that_do_not_move_and_the_shadows():
+    """A stream's frame over a still camera, its time-invariant fog and light held by the
+    worker (render/passes/fog.py, light.py): the estimate keeps the moving layers (wind,
+    drift, particles) toward the eye and the sun, and leaves out the others, the light
+    grid's shadow-map samples and their filter."""
     look = still(wind={"speed": 3.0}, effects={"sun_through_fog": True, "shafts": 1.0},
                  layers=[{"kind": "height"}, {"kind": "cosine", "wind": True},
                          {"kind": "noise", "drift": (0.0, 0.0, 1.0)}, {"kind": "potential"},
@@ -80,7 +81,8 @@ def test_held_fog_leaves_out_the_layers_that_do_not_move_and_the_shafts():
     layers = lambda c: sorted(k.split(" ")[0] for k in c.parts if k.startswith("layers["))  # noqa: E731
     assert layers(whole) == ["layers[0]", "layers[1]", "layers[2]", "layers[3]", "layers[4]"]
     assert layers(held) == ["layers[1]", "layers[2]", "layers[4]"]
-    assert "effects.shafts" in whole.parts and "effects.shafts" not in held.parts
+    grid = "effects.lit, effects.shafts (the light grid)"
+    assert 0 < held.parts[grid] < whole.parts[grid]
     assert not any(k.startswith("the filter") for k in held.parts)
     moving = cost.estimate(look.model_copy(update={"layers": [look.layers[i] for i in (1, 2, 4)]}),
                            scene_cached=True)

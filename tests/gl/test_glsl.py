@@ -80,7 +80,7 @@ def test_the_passes_read_only_what_earlier_passes_wrote():
     for p in FRAME_PASSES:
         assert set(p.reads) - available == set()
         available |= set(p.writes)
-    assert [p.name for p in FRAME_PASSES] == ["shadow", "scene", "sky", "resolve", "fog", "fog_filter", "particles",
+    assert [p.name for p in FRAME_PASSES] == ["shadow", "scene", "sky", "resolve", "light", "fog", "fog_filter", "particles",
                                               "composite", "blur", "output"]
 
 

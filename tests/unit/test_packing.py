@@ -17,7 +17,7 @@ from pydantic import ValidationError
 from draws import ALL, random_layer
 from fogbank.kinds import KINDS
 from fogbank.kinds.kind import LAYER_VEC4, Layout, SlotError
-from fogbank.kinds.packing import density_code, layer_code, variant
+from fogbank.kinds.packing import carve_code, density_code, layer_code, variant
 from fogbank.model.fields import MAX_LAYERS
 from fogbank.model.params import FogParams
 from fogbank.render.frame import Simulations, plan_fog
@@ -154,7 +154,8 @@ def test_a_pack_that_misses_a_slot_fails():
 
 def test_generated_glsl_comes_only_from_the_variant_key():
     rng = np.random.default_rng(3)
-    allowed = set().union(*(literal_values(k.model) for k in KINDS.values()))
+    # the models' literals, and the server's own flag of a carving body (kinds/box.py)
+    allowed = set().union(*(literal_values(k.model) for k in KINDS.values())) | {"carve"}
     for _ in range(200):
         names = [str(rng.choice(ALL)) for _ in range(int(rng.integers(0, 16)))]
         a = FogParams(layers=[random_layer(n, rng) for n in names])
@@ -162,8 +163,8 @@ def test_generated_glsl_comes_only_from_the_variant_key():
             assert kind in KINDS
             for x in v:
                 assert (type(x) is int and 0 <= x <= 8) or x in allowed
-        code = layer_code(variant(a)) + density_code(variant(a))
-        assert re.fullmatch(r"[\w\s.,;:()\[\]{}<>=+\-*/%#&|!]*", code) is not None
+        code = layer_code(variant(a)) + carve_code(variant(a)) + density_code(variant(a))
+        assert re.fullmatch(r"[\w\s.,;:?()\[\]{}<>=+\-*/%#&|!]*", code) is not None
 
 
 @pytest.mark.parametrize("patch", [

@@ -20,7 +20,8 @@ def test_a_thinned_swarm_is_every_kth_particle_of_the_layers_own():
     """A preview draws every k-th particle of the look's own swarm, k times as opaque (at
     most 1), so that changing a preview's detail simulates nothing again: the thinned
     layer's state is the full layer's cache entry, and its packed rows are that state's
-    every k-th row."""
+    every k-th row, farthest from the reference point first (the quads composite their
+    light back to front)."""
     fog = FogParams.model_validate({"layers": [LAYER]})
     sims = Simulations()
     t = 7.3
@@ -33,12 +34,15 @@ def test_a_thinned_swarm_is_every_kth_particle_of_the_layers_own():
         look = fog.model_copy(update={"layers": [thin]})
         packed = pack_layers(look, {0: (pos, strength)}, ref=(1.0, 2.0, 3.0), time=t)
         v = packed.values[0]
-        want = pos[::k]
+        want, want_s = pos[::k], strength[::k]
+        far = np.argsort(-np.linalg.norm(want - np.array([1.0, 2.0, 3.0]), axis=1), kind="stable")
         assert v["count"] == len(want) == -(-len(pos) // k)
         assert v["alpha"] == min(1.0, 0.3 * k)
         rows = packed.particles[v["first"]:v["first"] + v["count"]].astype(np.float64)
-        np.testing.assert_allclose(rows[:, :3], want - np.array([1.0, 2.0, 3.0]), atol=1e-4)
-        np.testing.assert_allclose(rows[:, 3], strength[::k], atol=1e-6)
+        np.testing.assert_allclose(rows[:, :3], want[far] - np.array([1.0, 2.0, 3.0]), atol=1e-4)
+        np.testing.assert_allclose(rows[:, 3], want_s[far], atol=1e-6)
+        dist = np.linalg.norm(rows[:, :3], axis=1)
+        assert np.all(np.diff(dist) <= 1e-4)   # farthest first
         assert thin.drawn == -(-64 // k)
 
 

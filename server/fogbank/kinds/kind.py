@@ -200,6 +200,11 @@ class Kind:
     log_transmittance: Callable | None = None
     density: Callable | None = None        # float64 density (layer, x, t, env), if it has one
     density_code: Callable[[Refs, tuple], str] | None = None   # GLSL `rho += ...` (raymarch)
+    # a body that can carve (kinds/carving.py): GLSL (its shell k's chord as a vec2 of
+    # absolute parameters, given int k and int shells; how many shells; its strength), and
+    # its float64 nested shells' chords along rays, [(share, s0, s1)]
+    carve_code: Callable[[Refs, tuple], tuple[str, str, str]] | None = None
+    shell_chords: Callable | None = None
     variant: Callable[[Any], tuple] = lambda layer: ()         # what the GLSL depends on
     cpu_only: frozenset = frozenset()      # fields that never reach the GPU data (by design)
     uses_noise: bool = False               # samples the baked noise tile

@@ -18,11 +18,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from fogbank.kinds import KINDS
+from fogbank.kinds.box import CARVE_SHELLS
 from fogbank.kinds.kind import LAYER_VEC4, Packing
 from fogbank.kinds.rays import velocity
 from fogbank.model.fields import MAX_LAYERS, MAX_PARTICLES
 
-DEFINES = {"MAX_LAYERS": MAX_LAYERS, "LAYER_VEC4": LAYER_VEC4}
+DEFINES = {"MAX_LAYERS": MAX_LAYERS, "LAYER_VEC4": LAYER_VEC4, "CARVE_SHELLS": CARVE_SHELLS}
 FLT_MIN = float(np.finfo(np.float32).tiny)
 
 
@@ -42,11 +43,21 @@ def split_by_time(fog) -> tuple:
     """The look as two: its enabled layers that do not change with time, and the others
     (each a copy of the look with only those layers, in their order). A layer that changes
     with time but whose kind can split it (Kind.split_by_time: a cosine's terms across the
-    wind) gives each part its share."""
+    wind) gives each part its share. A carving body that stays goes with both parts; one
+    that moves makes every layer move."""
     parts: tuple[list, list] = ([], [])
+    carving = [layer for _, layer in enabled(fog) if carves((layer.kind, KINDS[layer.kind].variant(layer)))]
+    if any(changes_with_time(layer, fog) for layer in carving):
+        # a moving carving body changes how much it takes from every other layer: all move
+        return fog.model_copy(update={"layers": []}), fog.model_copy(update={"layers": [l for _, l in enabled(fog)]})
     for _, layer in enabled(fog):
         split = KINDS[layer.kind].split_by_time
-        if not changes_with_time(layer, fog):
+        if layer in carving:
+            # a still carving body takes its share of each part's layers: it goes with both
+            # (the share is linear in the other layers' depth)
+            parts[0].append(layer)
+            parts[1].append(layer)
+        elif not changes_with_time(layer, fog):
             parts[0].append(layer)
         elif split is None:
             parts[1].append(layer)
@@ -54,6 +65,8 @@ def split_by_time(fog) -> tuple:
             for part, share in zip(parts, split(layer, velocity(layer, fog.wind.vector()))):
                 if share is not None:
                     part.append(share)
+    if all(layer in carving for layer in parts[1]):   # nothing moves: nothing for the bodies to carve there
+        parts[1].clear()
     return tuple(fog.model_copy(update={"layers": part}) for part in parts)
 
 
@@ -95,6 +108,11 @@ def _looped(key: tuple, inline_particles: bool) -> list[tuple[tuple, list[int]]]
             if len(m) > 1 and KINDS[kv[0]].loop and (inline_particles or not KINDS[kv[0]].quads)]
 
 
+def carves(kv: tuple) -> bool:
+    """A layer variant that carves (kinds/carving.py): its code is fog/carve.gen.glsl's."""
+    return "carve" in kv[1]
+
+
 def layer_code(key: tuple, inline_particles: bool = True) -> str:
     """fog/layers.gen.glsl for a variant key. With inline_particles False, kinds drawn by
     their own pass (particles: the quads pass) are left out.
@@ -117,6 +135,8 @@ def layer_code(key: tuple, inline_particles: bool = True) -> str:
         label = f"{name} {' '.join(map(str, v))}".rstrip()
         if kind.quads and not inline_particles:
             lines.append(f"// layer {n}: {name}, drawn by its own pass")
+        elif carves(kv):
+            lines.append(f"// layer {n}: {label}, carving (fog/carve.gen.glsl)")
         elif kv not in looped:
             lines.append(f"// layer {n}: {label}")
             lines.append(kind.code(kind.layout.refs(n * LAYER_VEC4), v))
@@ -132,11 +152,56 @@ def layer_code(key: tuple, inline_particles: bool = True) -> str:
     return "\n".join(lines) + "\n"
 
 
+def carve_code(key: tuple) -> str:
+    """fog/carve.gen.glsl: the carving layers (kinds/carving.py). Each takes its strength's
+    share of the other density layers' optical depth over each of its shells' chords, written
+    without subtracting two large sums (a ray inside a body of dense fog would keep only
+    float32's rounding of it): tau (1 - sum of strengths) plus each body's strength / K times
+    the others' depth outside each shell's chord ([0, s0] and [s1, d]: exactly the part
+    each shell leaves), one call of fogPlainDepths per piece. Several carving layers of one
+    kind are one loop over their slots (as layer_code's loops: one copy of fogPlainDepths)."""
+    lines = []
+    for kv, members in groups(key):
+        if not carves(kv):
+            continue
+        kind = KINDS[kv[0]]
+        base = "carveBase" if len(members) > 1 else members[0] * LAYER_VEC4
+        chord, shells, strength = kind.carve_code(kind.layout.refs(base), kv[1])
+        body = (f"int shells = {shells};\n"
+                f"carveStrength += {strength};\n"
+                f"for (int k = 0; k < shells; ++k) {{\n"
+                f"    vec2 ch = {chord};\n"
+                f"    float kept = plainTau;   // the shell missed: all of the ray is outside it\n"
+                f"    if (ch.y > ch.x) {{\n"
+                f"        kept = 0.0;\n"
+                f"        for (int j = 0; j < 2; ++j) {{   // [0, s0] and [s1, d]: one call site\n"
+                f"            float a = j == 0 ? 0.0 : ch.y, b = j == 0 ? ch.x : ds;\n"
+                f"            if (b > a) kept += fogPlainDepths(Os + w * a, w, b - a).x;\n"
+                f"        }}\n"
+                f"    }}\n"
+                f"    carveKept += {strength} / float(shells) * kept;\n"
+                f"}}")
+        lines.append(f"// layers {', '.join(map(str, members))}: {kv[0]}, carving")
+        if len(members) > 1:
+            slots = ", ".join(f"{LAYER_VEC4 * m}.0" for m in members)
+            lines.append(f"float carveSlots[{len(members)}] = float[{len(members)}]({slots});")
+            lines.append(f"for (int c = 0; c < {len(members)}; ++c) {{")
+            lines.append("int carveBase = int(carveSlots[c]);")
+            lines.append(body)
+            lines.append("}")
+        else:
+            lines.append("{")
+            lines.append(body)
+            lines.append("}")
+    return "\n".join(lines) + "\n"
+
+
 def density_code(key: tuple) -> str:
     """fog/density.gen.glsl (used only when RAYMARCH_STEPS is defined): the summed density
     at x of the layers whose kind has a GLSL density."""
     lines = []
-    for n, (name, v) in enumerate(key):
+    # the carving bodies last: they scale what the others' densities sum to
+    for n, (name, v) in sorted(enumerate(key), key=lambda nv: carves(nv[1])):
         kind = KINDS[name]
         if kind.density_code is None:
             lines.append(f"// layer {n}: {name} has no raymarched form")
@@ -149,6 +214,7 @@ def generated(key: tuple, inline_particles: bool = True) -> dict[str, str]:
     """The generated includes of a fog program for a variant key."""
     return {"fog/kinds.gen.glsl": kinds_code(),
             "fog/layers.gen.glsl": layer_code(key, inline_particles),
+            "fog/carve.gen.glsl": carve_code(key),
             "fog/density.gen.glsl": density_code(key)}
 
 

@@ -90,10 +90,14 @@ def transmittance(layer, state, O, omega, d):
 
 def pack(layer, p):
     # the particles' positions relative to E go to the particle texture, from this
-    # layer's first row; the block says where they are
+    # layer's first row; the block says where they are. Farthest from E first: the quads
+    # pass composites each particle's light over what lies behind it, back to front
+    # (render/shaders/passes/particles.frag); a product of clarities has no order.
     pos, strength = p.states[p.index]
     k = layer._stride
     pos, strength = pos[::k], strength[::k]
+    order = np.argsort(-np.linalg.norm(pos - p.ref, axis=1), kind="stable")
+    pos, strength = pos[order], strength[order]
     first, count = p.first_particle, len(pos)
     p.particles[first:first + count, :3] = pos - p.ref
     p.particles[first:first + count, 3] = strength

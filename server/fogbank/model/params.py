@@ -108,9 +108,18 @@ class Effects(Strict):
                               "in every direction when g = 0)")
     anisotropy: float = num(0.6, -0.95, 0.95, 0.01, "", "Henyey-Greenstein g: 0 scatters evenly, "
                             "> 0 forward (a glow round the sun), < 0 back toward it", group="Light")
-    shafts: float = num(0.0, 0, 1, 0.05, "", "light shafts, SAMPLED (not exact): the in-scattered "
-                        "sunlight is scaled toward the share of 16 jittered points along the view "
-                        "ray that the shadow map lights (0 = off, 1 = fully)", group="Light")
+    lit: Bool = Field(
+        False, json_schema_extra=grouped("Light"), description="lit fog (single scattering): the sunlight that "
+        "reaches each point of the fog is dimmed by the fog between it and the sun (the layers' closed forms), "
+        "so dense fog shades itself and fog behind fog is darker; fog_color is then the fog's colour in shade "
+        "(lit by the sky). Off: the papers' fog, lit everywhere alike")
+    shafts: float = num(0.0, 0, 1, 0.05, "", "shadows in the fog (light shafts): how much the scene's "
+                        "shadows, from the shadow map, take from the sunlight the fog scatters "
+                        "(0 = none, 1 = all of it)", group="Light")
+    light_quality: Literal["low", "medium", "high"] = Field(
+        "medium", json_schema_extra=grouped("Light"), description="the light grid of lit fog and shafts: "
+        "one view ray every 32, 16 or 8 px, cut into 12, 16 or 32 slices, with 2, 2 or 4 shadow-map samples "
+        "a slice (previews take 'low'); the fog's transmittance is exact at every quality")
     sun_through_fog: Bool = Field(
         False, json_schema_extra=grouped("Light"), description="dim the sunlight on each surface by the fog between it and the sun: "
                            "the density layers' closed forms along the sun's direction for "

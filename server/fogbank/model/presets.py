@@ -166,7 +166,7 @@ def _presets() -> dict[str, dict[str, Any]]:
                        "layers": [
                            {"kind": "height", "density": 0.05, "falloff": 0.04, "base": 0.0},
                            {"kind": "ellipsoid", "center": (hx, hy, hz), "radii": (22.0, 14.0, 22.0),
-                            "density": -0.12}]},
+                            "density": 0.0, "carve": 1.0, "edge_fade": 0.6}]},
         },
         "gawron-distance": {
             "title": "Gawron & Boryczka 2018: distance fog",

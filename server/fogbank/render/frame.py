@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from fogbank.kinds import KINDS
+from fogbank.kinds.particle_light import particle_light
 from fogbank.kinds.packing import Packed, direct_density, enabled, pack_layers, split_by_time, uses_noise, variant
 from fogbank.scene import camera as cam
 
@@ -57,6 +58,8 @@ class FogPlan:
     # with a still camera: the plans of the layers that do not change with time and of the
     # others (kinds/packing.py split_by_time), for the fog pass's two stages
     split: tuple["FogPlan", "FogPlan"] | None = None
+    # each packed particle's share of the sunlight (kinds/particle_light.py), for lit looks
+    particle_light: np.ndarray | None = None
 
     def signature(self) -> tuple:
         """Everything of this plan that the fog program reads: equal signatures draw equal fog."""
@@ -68,16 +71,20 @@ class FogPlan:
                 if KINDS[k].quads]
 
 
-def plan_fog(fog, time: float, ref, sims: Simulations, split: bool = False) -> FogPlan:
+def plan_fog(fog, time: float, ref, sims: Simulations, split: bool = False, light: bool = False) -> FogPlan:
     """The fog's plan at `time`, its layers packed relative to `ref`; with `split`, also the
-    plans of its layers that do not change with time and of the others (FogPlan.split)."""
+    plans of its layers that do not change with time and of the others (FogPlan.split);
+    with `light` (a frame's, of a lit look), each particle's share of the sunlight."""
     states = {i: sims.state(l, time, fog) for i, l in enabled(fog) if KINDS[l.kind].simulate}
     e = fog.effects
     n = fog.noise
-    halves = tuple(plan_fog(part, time, ref, sims) for part in split_by_time(fog)) if split else None
+    halves = tuple(plan_fog(part, time, ref, sims, light=light) for part in split_by_time(fog)) if split else None
+    packed = pack_layers(fog, states, ref, time)
     return FogPlan(
         key=variant(fog),
-        packed=pack_layers(fog, states, ref, time),
+        packed=packed,
+        particle_light=(particle_light(fog, packed, ref, time, fog.sun.direction(), e.sky_distance)
+                        if light and e.lit and states else None),
         has_particles=bool(states),
         noise=(n.size, n.octaves, n.blur, n.seed) if uses_noise(fog) else None,
         uniforms={"uStartDistance": e.start_distance, "uCutoffDistance": e.cutoff_distance,
@@ -100,10 +107,12 @@ class Frame:
     plan: Future                   # FogPlan, prepared off the GL thread
     scene_key: tuple = ()
     scene_cached: bool = False
+    draft: bool = False            # a preview (a user drags): cheaper light (passes/light.py)
     coarse_shadow: bool = False    # lit by the preview shadow map (Renderer.begin)
     shadow: Any = None             # the shadow map it is lit by (render/resources.py ShadowMap; the shadow pass)
+    light: Any = None              # the light grid its fog is lit by (passes/light.py LightGrid), if any
     held_fog: Any = None           # the held fog this frame's fog was drawn over (render/targets.py HeldFog)
-    # the fog target's channels already filtered ("T", "lit": a held fog's, passes/fog.py)
+    # the fog target's channels already filtered ("T": a held whole fog's, passes/fog.py)
     filtered: set = field(default_factory=set)
     raymarch_steps: int | None = None
     sun_view_proj: np.ndarray | None = None

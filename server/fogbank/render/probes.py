@@ -7,7 +7,7 @@ import time
 
 import numpy as np
 
-from fogbank.render.passes import (FogFilterPass, FogPass, ParticlesPass, ResolvePass, ScenePass,
+from fogbank.render.passes import (FogFilterPass, FogPass, LightPass, ParticlesPass, ResolvePass, ScenePass,
                                    ShadowPass, SkyPass)
 
 
@@ -36,7 +36,7 @@ def fog_frame(r, still, raymarch_steps: int | None = None, filtered: bool = Fals
     f.fog_plan()
     r.ctx.finish()
     t0 = time.perf_counter()
-    for p in (FogPass(), *([FogFilterPass()] if filtered else []), ParticlesPass()):
+    for p in (LightPass(), FogPass(), *([FogFilterPass()] if filtered else []), ParticlesPass()):
         p.run(r, f)
     r.ctx.finish()
     return (time.perf_counter() - t0) * 1000.0, f
@@ -44,7 +44,7 @@ def fog_frame(r, still, raymarch_steps: int | None = None, filtered: bool = Fals
 
 def fog_texels(f) -> np.ndarray:
     """A drawn frame's fog target, bottom row first: (raw T, 1/distance, T toward the sun,
-    lit share of the view ray) per texel."""
+    in-scattered sunlight J) per texel."""
     tex = f.fog_tex
     return np.frombuffer(tex.read(), np.float32).reshape(tex.height, tex.width, tex.components)
 

@@ -19,9 +19,6 @@ FULLSCREEN = "passes/fullscreen.vert"
 MAX_VARIANTS = 16
 
 
-SHAFT_SAMPLES = 16   # shadow-map samples per view ray for light shafts
-
-
 class Programs:
     def __init__(self, ctx):
         self.ctx = ctx
@@ -57,22 +54,31 @@ class Programs:
         self.vaos[prog].render(mode, vertices=vertices, instances=instances)
 
     def fog(self, layers: tuple, raymarch_steps: int | None = None, sun: bool = False,
-            shafts: bool = False, stage: int = 0, held_direct: bool = False):
+            light: bool = False, stage: int = 0, held_direct: bool = False):
         """The fog pass; particles are left to the quads pass. With raymarch_steps, the
         exponential layers are raymarched instead (the benchmark's comparison); with sun,
-        it also integrates each visible point's fog toward the sun; with shafts, it samples
-        the shadow map along each view ray (SHAFT_SAMPLES). `stage` 1 and 2 split the fog of
-        a still camera in two (passes/fog.frag FOG_STAGE): 1 the sums of the layers that do
-        not change with time (and the shafts), 2 the others over them; `held_direct`: the
+        it also integrates each visible point's fog toward the sun; with light, its
+        in-scattered light is lit by the light grid (passes/light.frag). `stage` 1 and 2
+        split the fog of a still camera in two (passes/fog.frag FOG_STAGE): 1 the sums of
+        the layers that do not change with time, 2 the others over them; `held_direct`: the
         held sums include a direct transmittance's (STATIC_DIRECT)."""
         extra = {"RAYMARCH_STEPS": raymarch_steps} if raymarch_steps else {}
         if sun and not raymarch_steps:
             extra["SUN_THROUGH_FOG"] = 1
-        if shafts and stage != 2:
-            extra["SHAFTS"] = SHAFT_SAMPLES
+        if light and stage != 1 and not raymarch_steps:
+            extra["LIGHT_GRID"] = 1
         if stage:
             extra["FOG_STAGE"] = stage
         if held_direct:
             extra["STATIC_DIRECT"] = 1
         return self.get(FULLSCREEN, "passes/fog.frag", layers, inline_particles=False,
                         **extra)
+
+    def light(self, layers: tuple, slices: int, shadow_taps: int, lit: bool, stage: int = 0):
+        """The light grid's march (passes/light.frag) for a fog of these layers (particles
+        are lit by their quads): `slices` slices a column, `shadow_taps` shadow-map samples
+        a slice (0: no shadows), with `lit` the fog toward the sun; `stage` 1 and 2 split a
+        still camera's (LIGHT_STAGE)."""
+        extra = {"SUN_THROUGH_FOG": 1} if lit else {}
+        return self.get(FULLSCREEN, "passes/light.frag", layers, inline_particles=False, SLICES=slices,
+                        SHADOW_TAPS=shadow_taps, LIT=int(lit), LIGHT_STAGE=stage, **extra)

@@ -71,10 +71,10 @@ class Renderer:
         g.last_frame = "reused" if cached else ("new" if g.scene_key is None else "redrawn")
         self.scene_reused = cached
         # the plan's split (FogPlan.split) is what asks the fog pass to hold
-        plan = self._prep.submit(plan_fog, still, still.time, view.eye, self.sims, hold_fog and cached)
+        plan = self._prep.submit(plan_fog, still, still.time, view.eye, self.sims, hold_fog and cached, True)
         return Frame(still=still, slot=slot, msaa=msaa, view=view,
                      targets=self.caches.targets(w, h), gbuffer=g, plan=plan,
-                     scene_key=key, scene_cached=cached, coarse_shadow=coarse)
+                     scene_key=key, scene_cached=cached, draft=draft, coarse_shadow=coarse)
 
     def render(self, still, slot: str = "still", msaa: bool = True, hold_fog: bool = False,
                draft: bool = False, lend: bool = False, channels: int = 3) -> np.ndarray:
@@ -95,6 +95,9 @@ class Renderer:
 
     def transmittance(self, fog, origins, directions, lengths, times) -> np.ndarray:
         return self.rays.transmittance(fog, origins, directions, lengths, times)
+
+    def light(self, fog, origins, directions, lengths, times) -> dict[str, np.ndarray]:
+        return self.rays.light(fog, origins, directions, lengths, times)
 
     # ------------------------------------------------------------ info and caches
 

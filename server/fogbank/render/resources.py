@@ -228,7 +228,8 @@ class NoiseTiles:
 
 
 def particle_texture(ctx) -> moderngl.Texture:
-    """(x, y, z, strength) per particle, one row, relative to the draw's reference point."""
-    tex = ctx.texture((MAX_PARTICLES, 1), 4, dtype="f4")
+    """Two rows: (x, y, z, strength) per particle, relative to the draw's reference point;
+    (its share of the sunlight, 0, 0, 0) (kinds/particle_light.py; 1 for unlit looks)."""
+    tex = ctx.texture((MAX_PARTICLES, 2), 4, dtype="f4")
     tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
     return tex

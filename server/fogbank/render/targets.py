@@ -26,10 +26,14 @@ LINEAR_BPP = 2 * 8                            # two RGBA16F blur targets
 # resolve, passes/resolve.frag): RGBA16F colour and coverage, R32F inverse distance
 GBUFFER_BPP = 8 + 4 + 4 + 8 + 4
 SUNLIGHT_BPP = 8                              # RGBA16F direct sunlight (sun_through_fog only), per sample
-FOG_BPP = 16                                  # RGBA32F (raw T, 1/distance, T toward the sun, lit share)
+FOG_BPP = 16                                  # RGBA32F (raw T, 1/distance, T toward the sun, in-scattered light J)
+# the light grid (render/passes/light.py), per column and slice: the march's (S, A) halves
+# in RGBA32UI outputs (4 slices a texel), their RG16F stack, its buffer and 3D texture
+LIGHT_BPS = 4 + 4 + 4 + 4
+# a still camera's held light (render/passes/light.py), per froxel: RGBA32F
+HELD_LIGHT_BPS = 16
 # a still camera's held fog (passes/fog.py), per fog texel: RGBA32F sums (tau, 1/distance,
-# tau toward the sun, lit share), their copy with the lit share filtered (shafts), and
-# R32F tauDirect (looks with a time-invariant direct layer)
+# tau toward the sun, 0), and R32F tauDirect (looks with a time-invariant direct layer)
 HELD_FOG_BPP = 16
 HELD_DIRECT_BPP = 4
 # the held composite's inputs (passes/composite_inputs.frag), per pixel: A and B packed as
@@ -71,6 +75,7 @@ class Targets:
     msaa_fbos: dict[bool, moderngl.Framebuffer] = field(default_factory=dict)   # by sunlight
     fog: dict[tuple[int, int], tuple[moderngl.Framebuffer, moderngl.Texture]] = field(default_factory=dict)
     linear: list[tuple[moderngl.Framebuffer, moderngl.Texture]] = field(default_factory=list)
+    light: dict[tuple[int, int], "LightTargets"] = field(default_factory=dict)   # by (tile, slices)
     # by channels (3 RGB, 4 RGBX): the kept readback buffers (readback)
     _readback: dict[int, tuple[bytearray, np.ndarray]] = field(default_factory=dict, repr=False, compare=False)
 
@@ -108,12 +113,16 @@ class Targets:
         for scale, _ in self.fog:
             n += -(-w // scale) * -(-h // scale) * FOG_BPP
         n += len(self.linear) * w * h * 8
+        n += sum(t.nbytes() for t in self.light.values())
         return n
 
     def release(self) -> None:
         for fbo in [self.out, *self.msaa_fbos.values()] + [f for f, _ in self.fog.values()] + \
                 [f for f, _ in self.linear]:
             release_fbo(fbo)
+        for t in self.light.values():
+            t.release()
+        self.light.clear()
         self.fog.clear()
         self.linear.clear()
         self.msaa_fbos.clear()
@@ -144,6 +153,13 @@ class Targets:
             self.fog[scale, index] = (self.ctx.framebuffer(color_attachments=[tex]), tex)
         return self.fog[scale, index]
 
+    def light_grid(self, tile: int, slices: int) -> "LightTargets":
+        """The light grid's targets for columns `tile` px apart and `slices` slices."""
+        if (tile, slices) not in self.light:
+            w, h = self.size
+            self.light[tile, slices] = LightTargets.make(self.ctx, (-(-w // tile), -(-h // tile)), slices)
+        return self.light[tile, slices]
+
     def linear_pair(self):
         """Two RGBA16F targets for the separate blur passes."""
         while len(self.linear) < 2:
@@ -154,14 +170,54 @@ class Targets:
 
 
 @dataclass
+class LightTargets:
+    """The light grid (render/passes/light.py) of `columns` view rays cut into `slices`:
+    the march's outputs, four slices a texel (RGBA32UI, passes/light.frag), the slices one
+    above the other (RG16F, passes/light_atlas.frag), read into a buffer and written to
+    `grid`, the 3D texture of (S, A) that fog/light_grid.glsl filters."""
+    columns: tuple[int, int]
+    slices: int
+    march: moderngl.Framebuffer
+    stack: moderngl.Framebuffer
+    buffer: moderngl.Buffer
+    grid: moderngl.Texture3D
+
+    @staticmethod
+    def make(ctx: moderngl.Context, columns: tuple[int, int], slices: int) -> "LightTargets":
+        outs = [ctx.texture(columns, 4, dtype="u4") for _ in range(slices // 4)]
+        for t in outs:
+            t.filter = (moderngl.NEAREST, moderngl.NEAREST)
+        stack = ctx.texture((columns[0], columns[1] * slices), 2, dtype="f2")
+        grid = ctx.texture3d((*columns, slices), 2, dtype="f2")
+        grid.filter = (moderngl.LINEAR, moderngl.LINEAR)
+        grid.repeat_x = grid.repeat_y = grid.repeat_z = False
+        return LightTargets(columns, slices, ctx.framebuffer(color_attachments=outs),
+                            ctx.framebuffer(color_attachments=[stack]),
+                            ctx.buffer(reserve=columns[0] * columns[1] * slices * 4), grid)
+
+    def upload(self) -> None:
+        """The stacked slices into the 3D texture, through the buffer (no trip to the host on
+        a GPU)."""
+        self.stack.read_into(self.buffer, components=2, dtype="f2", alignment=1)
+        self.grid.write(self.buffer, alignment=1)
+
+    def nbytes(self) -> int:
+        return self.columns[0] * self.columns[1] * self.slices * LIGHT_BPS
+
+    def release(self) -> None:
+        release_fbo(self.march)
+        release_fbo(self.stack)
+        self.buffer.release()
+        self.grid.release()
+
+
+@dataclass
 class HeldFog:
     """The time-invariant part of a still camera's fog at one fog scale (passes/fog.py,
-    stage 1), kept with its scene pass: the sums, and their copy with the lit share
-    filtered where shafts sampled it; `key` is what drew them."""
+    stage 1), kept with its scene pass: the sums; `key` is what drew them."""
     fbo: moderngl.Framebuffer           # stage 1's targets: the sums (+ tauDirect)
     sums: moderngl.Texture
     direct: moderngl.Texture | None
-    filtered: tuple[moderngl.Framebuffer, moderngl.Texture] | None
     whole: bool = False                 # `sums` holds the whole fog target, filtered (nothing moves)
     key: object = None
     # the held composite's inputs over this fog (passes/composite_inputs.frag): AB, W at
@@ -182,8 +238,8 @@ class HeldFog:
 
     @property
     def texture(self) -> moderngl.Texture:
-        """The sums stage 2 reads (lit share filtered, where it was sampled)."""
-        return self.filtered[1] if self.filtered else self.sums
+        """The sums stage 2 reads, or (whole) the held fog target."""
+        return self.sums
 
     def composite_inputs(self, ctx: moderngl.Context, size: tuple[int, int]) -> moderngl.Framebuffer:
         if self.inputs is None:
@@ -253,7 +309,7 @@ class HeldFog:
 
     def nbytes(self) -> int:
         n = self.sums.width * self.sums.height
-        n *= HELD_FOG_BPP * (2 if self.filtered else 1) + (HELD_DIRECT_BPP if self.direct else 0)
+        n *= HELD_FOG_BPP + (HELD_DIRECT_BPP if self.direct else 0)
         if self.far_tiles is not None:
             n += self.far_tiles.width * self.far_tiles.height * HELD_FAR_TILE_BYTES
             listed = self.far_list.width * self.far_list.height
@@ -266,8 +322,6 @@ class HeldFog:
 
     def release(self) -> None:
         release_fbo(self.fbo)
-        if self.filtered:
-            release_fbo(self.filtered[0])
         release_fbo(self.inputs)
         if self.edges is not None:
             self.edges.release()
@@ -308,14 +362,18 @@ class GBuffer:
     # (another scene pass drawn over it) or "reused" (its scene pass as it was)
     last_frame: str = "new"
     fog_seen: dict[int, object] = field(default_factory=dict)   # the held-fog key of the last frame, by fog scale
+    # the light grid's time-invariant froxels (render/passes/light.py, LIGHT_STAGE 1), kept
+    # with the scene pass: RGBA32F in the grid's atlas layout, what drew it, and the key of
+    # the last frame that asked
+    held_light: moderngl.Framebuffer | None = None
+    held_light_key: object = None
+    light_seen: object = None
 
-    def held_fog(self, ctx: moderngl.Context, scale: int, direct: bool, filtered: bool,
-                 whole: bool = False) -> HeldFog:
-        """The held fog's targets at `scale` with a tauDirect target (`direct`) and a
-        filtered copy (`filtered`), made anew when those differ from what it has; `whole`:
-        its target holds the whole fog."""
+    def held_fog(self, ctx: moderngl.Context, scale: int, direct: bool, whole: bool = False) -> HeldFog:
+        """The held fog's targets at `scale` with a tauDirect target (`direct`), made anew
+        when that differs from what it has; `whole`: its target holds the whole fog."""
         h = self.held.get(scale)
-        if h is not None and (h.direct is not None) == direct and (h.filtered is not None) == filtered:
+        if h is not None and (h.direct is not None) == direct:
             h.whole = whole
             return h
         if h is not None:
@@ -327,11 +385,7 @@ class GBuffer:
         if tau_direct is not None:
             tau_direct.filter = (moderngl.NEAREST, moderngl.NEAREST)
         fbo = ctx.framebuffer(color_attachments=[sums] + ([tau_direct] if direct else []))
-        copy = None
-        if filtered:
-            t = fog_texture(ctx, size)
-            copy = (ctx.framebuffer(color_attachments=[t]), t)
-        self.held[scale] = HeldFog(fbo, sums, tau_direct, copy, whole)
+        self.held[scale] = HeldFog(fbo, sums, tau_direct, whole)
         return self.held[scale]
 
     def mipmaps(self) -> None:
@@ -350,6 +404,8 @@ class GBuffer:
             n += self.color.width * self.color.height * (8 + (SUNLIGHT_BPP if self.sunlight else 0)) // 3
         if self.tile_list is not None:
             n += self.tile_list.width * self.tile_list.height * 8
+        if self.held_light is not None:
+            n += self.held_light.width * self.held_light.height * HELD_LIGHT_BPS
         return n + sum(h.nbytes() for h in self.held.values())
 
     @property
@@ -384,11 +440,23 @@ class GBuffer:
         return self.tile_list, self.tile_count
 
     def drop_held(self) -> None:
-        """Release the held fog (its scene pass is about to be drawn anew)."""
+        """Release the held fog and light (its scene pass is about to be drawn anew)."""
         for h in self.held.values():
             h.release()
         self.held.clear()
         self.fog_seen.clear()
+        release_fbo(self.held_light)
+        self.held_light = self.held_light_key = self.light_seen = None
+
+    def light_target(self, ctx: moderngl.Context, size: tuple[int, int]) -> moderngl.Framebuffer:
+        """The held light's target, (re)made at `size` (columns x slices, rows)."""
+        if self.held_light is None or self.held_light.size != size:
+            release_fbo(self.held_light)
+            tex = ctx.texture(size, 4, dtype="f4")
+            tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+            self.held_light = ctx.framebuffer(color_attachments=[tex])
+            self.held_light_key = None
+        return self.held_light
 
     def release(self) -> None:
         self.drop_held()

@@ -548,7 +548,13 @@ def _far_skirt() -> np.ndarray:
             for k in range(len(edge) - 1):              # the fan from the far side's first corner
                 tris += [f0, edge[k], edge[k + 1]]
             tris += [f0, edge[-1], f1]
-    pos = np.array(tris, dtype=np.float64)
+    pos = np.array(tris, dtype=np.float64).reshape(-1, 3, 3)
+    # wound as the grid's triangles, facing up: the fans on two of the square's sides came
+    # out the other way, and the scene program shades a back face by its reversed normal
+    # (a dark band of ground shaded from below along the detailed land's edge)
+    up = np.cross(pos[:, 1] - pos[:, 0], pos[:, 2] - pos[:, 0])[:, 1] < 0
+    pos[up, 1], pos[up, 2] = pos[up, 2].copy(), pos[up, 1].copy()
+    pos = pos.reshape(-1, 3)
     return _tris(pos, terrain.normal(pos[:, 0], pos[:, 2]), (1.0, 1.0, 1.0), 1.0)
 
 

@@ -107,6 +107,21 @@ class TransmittanceResponse(BaseModel):
     renderer: str
 
 
+class LightResponse(BaseModel):
+    transmittance: list[float] = Field(description="each ray's T, as /api/transmittance gives it")
+    in_scattered: list[float] = Field(description="J: the sunlight the ray's fog scatters toward its origin, as a "
+                                      "share of the sun's in-scattering without fog toward the sun or shadows "
+                                      "(0 to 1 - T of the medium): the single-scattering integral of "
+                                      "-dT/ds T_sun V over the ray")
+    medium_transmittance: list[float] = Field(description="the fog's own T along the ray, without the cutoff "
+                                              "distance or max opacity: the T that J is integrated with")
+    light: list[tuple[float, float, float]] = Field(
+        description="the fog's light along the ray, linear RGB, as the composite adds it to T times the "
+                    "surface: (1 - T) fog_color + sun colour x intensity x scatter_color x scatter x phase x J "
+                    "(phase: the look's lobe at the angle between the ray and the sun)")
+    renderer: str
+
+
 def _validation_error(exc: ValidationError, prefix: tuple) -> RequestValidationError:
     return RequestValidationError(errors.from_validation(exc, prefix))
 
@@ -319,13 +334,9 @@ def create_app(settings: Settings | None = None) -> FastAPI:
                                                        "json_invalid")]) from None
         return await _still(resolve(body), format, request, "body")
 
-    @app.post("/api/transmittance", response_model=TransmittanceResponse,
-              responses={413: TOO_LARGE,
-                         422: {"description": "bad rays or params, or more particle simulation than "
-                                              "this server does per request"},
-                         503: {"description": "busy or slow renderer; see Retry-After"}},
-              summary="Transmittance of rays through the fog, by the frame's own GLSL")
-    async def transmittance(req: TransmittanceRequest):
+    def rays_of(req: TransmittanceRequest, light: bool = False):
+        """A rays request's look and (origins, unit directions, lengths, times, cost);
+        `light`: costed as the light endpoint's."""
         fog = resolve(req.params, FogParams, ("body", "params"))
         O = np.array([r.origin for r in req.rays], dtype=np.float64)
         W = np.array([r.direction for r in req.rays], dtype=np.float64)
@@ -340,7 +351,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         D = np.array([r.length for r in req.rays])
         Tm = np.array([r.time for r in req.rays])
         groups = len(np.unique(np.column_stack([Tm, O]), axis=0))
-        c = cost.transmittance_seconds(fog, len(D), len(np.unique(Tm)), settings.cost_scale, groups)
+        c = cost.transmittance_seconds(fog, len(D), len(np.unique(Tm)), settings.cost_scale, groups, light)
         if c.seconds > settings.still_budget_s:
             metrics.ERRORS.labels("cost").inc()
             raise RequestValidationError([errors.error(
@@ -348,9 +359,36 @@ def create_app(settings: Settings | None = None) -> FastAPI:
                 "ray time simulates every particle layer, each distinct origin and time is one "
                 f"draw); this server allows {settings.still_budget_s:g} s: use fewer distinct "
                 "times, origins or particles", "cost")])
+        return fog, O, W, D, Tm, c
+
+    @app.post("/api/transmittance", response_model=TransmittanceResponse,
+              responses={413: TOO_LARGE,
+                         422: {"description": "bad rays or params, or more particle simulation than "
+                                              "this server does per request"},
+                         503: {"description": "busy or slow renderer; see Retry-After"}},
+              summary="Transmittance of rays through the fog, by the frame's own GLSL")
+    async def transmittance(req: TransmittanceRequest):
+        fog, O, W, D, Tm, c = rays_of(req)
         out = await _job(_slot_for(c.seconds), worker.transmittance, fog, O, W, D, Tm,
                          deadline=settings.render_timeout_s)
         return {"transmittance": [float(x) for x in out["T"]],
+                "renderer": state["workers"].info.get("renderer", "")}
+
+    @app.post("/api/light", response_model=LightResponse,
+              responses={413: TOO_LARGE,
+                         422: {"description": "bad rays or params, or more particle simulation than "
+                                              "this server does per request"},
+                         503: {"description": "busy or slow renderer; see Retry-After"}},
+              summary="The light the fog scatters along rays (single scattering), by the GLSL that lights "
+                      "the frames: each ray marched in 128 slices, the fog toward the sun by the closed forms "
+                      "(effects.lit), the scene's shadows from its shadow map (effects.shafts)")
+    async def light(req: TransmittanceRequest):
+        fog, O, W, D, Tm, c = rays_of(req, light=True)
+        out = await _job(_slot_for(c.seconds), worker.light, fog, O, W, D, Tm,
+                         deadline=settings.render_timeout_s)
+        return {"transmittance": [float(x) for x in out["T"]], "in_scattered": [float(x) for x in out["J"]],
+                "medium_transmittance": [float(x) for x in out["T_medium"]],
+                "light": [tuple(float(v) for v in row) for row in out["light"]],
                 "renderer": state["workers"].info.get("renderer", "")}
 
     suggest_lock = asyncio.Lock()

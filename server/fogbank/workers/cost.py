@@ -15,9 +15,10 @@ from dataclasses import dataclass, field
 from fogbank.kinds import KINDS
 from fogbank.kinds.packing import changes_with_time, enabled, groups, uses_noise, variant
 from fogbank.model.params import FogParams, StillParams
-from fogbank.render.passes.fog_filter import jittered, jittered_t
-from fogbank.render.targets import (FOG_BPP, GBUFFER_BPP, LINEAR_BPP, MSAA_BPP, MSAA_SAMPLES, OUT_BPP, READBACK_BPP,
-                                   SUNLIGHT_BPP)
+from fogbank.render.passes.fog_filter import jittered
+from fogbank.render.passes.light import grid_shape, lights
+from fogbank.render.targets import (FOG_BPP, GBUFFER_BPP, LIGHT_BPS, LINEAR_BPP, MSAA_BPP, MSAA_SAMPLES, OUT_BPP,
+                                   READBACK_BPP, SUNLIGHT_BPP)
 
 # seconds on the reference machine
 # The scene pass (with the sky, and the resolve with MSAA), drawn over the countryside
@@ -32,7 +33,13 @@ SCENE_PREVIEW_S_PER_MPX = 0.12
 COMPOSITE_S_PER_MPX = 0.05
 BLUR_S_PER_MPX = 0.25              # the fused blur: 25 mip taps with depth weights, and the pyramid
 SUNLIGHT_S_PER_MPX = 0.08          # sun_through_fog's G-buffer attachment (~50 ms at 1280x720)
-SHAFTS_S_PER_FOG_MPX = 0.08        # 16 shadow-map samples per fog texel (~45 ms at 1280x720)
+# the light grid (render/passes/light.py), per froxel: its own work (the march's
+# bookkeeping, the scan's packing and the 3D texture) and each shadow-map sample; its layers
+# cost what they cost per fog texel (once along the view ray, once more toward the sun
+# when lit). At 1280x720, "medium" (58k froxels) of the default look: 6 ms unlit, 8-10 lit.
+LIGHT_S_PER_FROXEL = 3e-8
+SHADOW_TAP_S = 1.5e-8
+SHADOW_MAP_S = 0.15   # a full shadow map and its lightmap, drawn for a sun no map was drawn for
 JITTER_FILTER_S_PER_FOG_MPX = 0.035   # the 3x3 filter of a jittered fog target (~32 ms at 1280x720, fog_scale 1)
 ENCODE_S_PER_MPX = {"jpg": 0.01, "png": 0.04, "webp": 0.08}
 # the fog pass's cost per layer comes from each kind (kinds/<name>.py: seconds_per_mpx,
@@ -65,11 +72,12 @@ def _layer_seconds(layer, fog_mpx: float) -> float:
 
 
 def program_key(still: StillParams) -> tuple:
-    """What a worker's compiled fog program depends on: the layers' variant, and whether
-    it integrates toward the sun and samples shafts (compile-time defines; the fog scale
-    is a uniform)."""
+    """What a worker's compiled fog programs depend on: the layers' variant, whether it
+    integrates toward the sun, and its light grid's shape (compile-time defines; the fog
+    scale is a uniform)."""
     e = still.effects
-    return variant(still), e.sun_through_fog, e.shafts > 0
+    light = (e.lit, e.shafts > 0, grid_shape(still)) if lights(still) else None
+    return variant(still), e.sun_through_fog, light
 
 
 def jit_seconds(variant: tuple) -> float:
@@ -107,13 +115,19 @@ def estimate(still: StillParams, msaa: bool = True, fmt: str = "jpg", scale: flo
     if e.sun_through_fog:   # every layer again, along the sun's direction, and the attachment
         parts["effects.sun_through_fog"] = SUNLIGHT_S_PER_MPX * mpx + sum(
             _layer_seconds(layer, fog_mpx) for _, layer in drawn)
-    if e.shafts > 0 and not fog_held:
-        parts["effects.shafts"] = SHAFTS_S_PER_FOG_MPX * fog_mpx
+    if lights(still):
+        tile, slices, taps = grid_shape(still)
+        froxels = -(-still.width // tile) * -(-still.height // tile) * slices
+        # a still camera's grid holds the layers that do not move and the shadows
+        shadow = taps * SHADOW_TAP_S if e.shafts > 0 and not fog_held else 0.0
+        parts["effects.lit, effects.shafts (the light grid)"] = froxels * (LIGHT_S_PER_FROXEL + shadow) + \
+            froxels / 1e6 * (2 if e.lit else 1) * sum(_layer_seconds(layer, 1.0) for _, layer in drawn
+                                                      if not KINDS[layer.kind].quads)
     # a held fog of moving layers filters its volume noise each frame; with none, the held
     # fog is the filtered fog target itself
-    filtered = (jittered_t(still) and bool(drawn)) if fog_held else jittered(still)
+    filtered = jittered(still) and (bool(drawn) or not fog_held)
     if filtered:   # passes/fog_filter.py
-        parts["the filter of jittered samples (volume noise, shafts)"] = JITTER_FILTER_S_PER_FOG_MPX * fog_mpx
+        parts["the filter of jittered samples (volume noise)"] = JITTER_FILTER_S_PER_FOG_MPX * fog_mpx
     n = still.noise
     if not baked and uses_noise(still) and (n.size, n.octaves, n.blur, n.seed) != DEFAULT_BAKE:
         parts[f"noise.size = {n.size} (baking the noise tile, once per worker)"] = bake_seconds(n)
@@ -122,6 +136,8 @@ def estimate(still: StillParams, msaa: bool = True, fmt: str = "jpg", scale: flo
         # toward the sun, the layers' code is inlined a second time
         parts[f"compiling the fog program for {len(key)} layers (once per worker)"] = \
             jit_seconds(key) * (2 if e.sun_through_fog else 1)
+        if lights(still):   # the light grid's march: the layers again, toward the sun too when lit
+            parts["compiling the light grid's program (once per worker)"] = jit_seconds(key) * (2 if e.lit else 1)
     # the output, its kept readback (render/targets.py Targets.readback) and the scene pass,
     # and 4 bytes a pixel of margin (the estimate's since it began)
     memory = px * (OUT_BPP + READBACK_BPP + GBUFFER_BPP + 4) + int(fog_mpx * 1e6) * FOG_BPP * (2 if filtered else 1)
@@ -131,6 +147,9 @@ def estimate(still: StillParams, msaa: bool = True, fmt: str = "jpg", scale: flo
         memory += px * SUNLIGHT_BPP * (2 + (MSAA_SAMPLES if msaa else 0))
     if e.blur == "separate":
         memory += px * LINEAR_BPP
+    if lights(still):
+        tile, slices, _ = grid_shape(still)
+        memory += -(-still.width // tile) * -(-still.height // tile) * slices * LIGHT_BPS
     if e.blur == "single":   # the mip pyramid of the colour (and sunlight): a third more
         memory += px * (8 + (SUNLIGHT_BPP if e.sun_through_fog else 0)) // 3
     seconds = sum(parts.values()) * scale
@@ -160,18 +179,24 @@ def plot_seconds(fog: FogParams, scale: float = 1.0) -> Cost:
 
 
 def transmittance_seconds(fog: FogParams, rays: int, distinct_times: int, scale: float = 1.0,
-                          groups: int = 1) -> Cost:
+                          groups: int = 1, light: bool = False) -> Cost:
     """Rays cost little; each distinct time simulates every particle layer once; each
     group of rays sharing an origin and a time is one draw, its layers packed relative
-    to that origin (measured on llvmpipe: ~40 us + ~28 us per layer + 0.15 us per particle)."""
+    to that origin (measured on llvmpipe: ~40 us + ~28 us per layer + 0.15 us per particle).
+    `light`: the light endpoint's rays, each marched in LIGHT_RAY_SLICES slices (toward the
+    sun too when lit), and the look's shadow map drawn for its shadows."""
+    from fogbank.render.rays import LIGHT_RAY_SLICES
     simulated = [l for _, l in enabled(fog) if KINDS[l.kind].simulate]
     sim = sum(KINDS[l.kind].simulate_seconds(l) for l in simulated)
     particles = sum(getattr(l, "count", 0) for l in simulated)
-    parts = {"rays": 2e-6 * rays * max(1, len(fog.layers)),
+    per_ray = LIGHT_RAY_SLICES * (2 if fog.effects.lit else 1) if light else 1
+    parts = {"rays": 2e-6 * rays * max(1, len(fog.layers)) * per_ray,
              "distinct ray times x particle simulation": distinct_times * sim,
              "distinct ray origins x packing": groups * (40e-6 + 28e-6 * len(fog.layers)
                                                          + 0.15e-6 * particles)}
+    if light and fog.effects.shafts > 0:
+        parts["the shadow map"] = SHADOW_MAP_S
     n = fog.noise
     if uses_noise(fog) and (n.size, n.octaves, n.blur, n.seed) != DEFAULT_BAKE:
         parts["noise bake"] = bake_seconds(n)
-    return Cost(sum(parts.values()) * scale, rays * 48, {k: v * scale for k, v in parts.items()})
+    return Cost(sum(parts.values()) * scale, rays * (80 if light else 48), {k: v * scale for k, v in parts.items()})

@@ -252,6 +252,13 @@ def transmittance(fog, origins: np.ndarray, directions: np.ndarray, lengths: np.
     return _run(fn)
 
 
+def light(fog, origins: np.ndarray, directions: np.ndarray, lengths: np.ndarray,
+          times: np.ndarray) -> dict[str, Any]:
+    def fn(r):
+        return r.light(fog, origins, directions, lengths, times)
+    return _run(fn)
+
+
 def noop() -> dict[str, Any]:
     """An empty job: what the process boundary alone costs (benchmark)."""
     return _run(lambda r: {})

@@ -5,10 +5,13 @@ frame's inputs are the look, the view and the fog plan (render/frame.py).
     scene      meshes, shadow_map, view      -> scene_target (cleared)
     sky        look.sun, view, scene_target  -> scene_target (where no surface is)
     resolve    scene_target                  -> gbuffer (near and far surface per pixel)
-    fog        gbuffer.invdist, fog_plan     -> fog (and gbuffer.held: a still camera's
-                                                time-invariant fog, drawn once)
+    light      fog_plan, view, shadow_map    -> light_grid (lit looks: the sunlit share of
+                                                the in-scattered light along coarse rays)
+    fog        gbuffer.invdist, fog_plan,    -> fog (and gbuffer.held: a still camera's
+               light_grid                       time-invariant fog, drawn once)
     fog_filter fog, fog_plan                 -> fog (3x3, jittered looks only)
-    particles  gbuffer.invdist, fog_plan     -> fog (clarity multiplied in)
+    particles  gbuffer.invdist, fog_plan,    -> fog (clarity multiplied in, their light
+               light_grid                       composited over the fog's)
     composite  gbuffer, fog                  -> out (or linear, blur separate; over a held
                                                 fog, from inputs held with it)
     blur       linear                        -> out
@@ -22,6 +25,7 @@ from fogbank.render.passes.blur import BlurPass
 from fogbank.render.passes.composite import CompositePass
 from fogbank.render.passes.fog import FogPass
 from fogbank.render.passes.fog_filter import FogFilterPass
+from fogbank.render.passes.light import LightPass
 from fogbank.render.passes.output import OutputPass
 from fogbank.render.passes.particles import ParticlesPass
 from fogbank.render.passes.resolve import ResolvePass
@@ -30,9 +34,9 @@ from fogbank.render.passes.shadow import ShadowPass
 from fogbank.render.passes.sky import SkyPass
 
 FRAME_PASSES: tuple[Pass, ...] = (
-    ShadowPass(), ScenePass(), SkyPass(), ResolvePass(), FogPass(), FogFilterPass(), ParticlesPass(), CompositePass(),
+    ShadowPass(), ScenePass(), SkyPass(), ResolvePass(), LightPass(), FogPass(), FogFilterPass(), ParticlesPass(), CompositePass(),
     BlurPass(), OutputPass(),
 )
 
-__all__ = ["FRAME_INPUTS", "FRAME_PASSES", "BlurPass", "CompositePass", "FogFilterPass", "FogPass",
+__all__ = ["FRAME_INPUTS", "FRAME_PASSES", "BlurPass", "CompositePass", "FogFilterPass", "FogPass", "LightPass",
            "OutputPass", "ParticlesPass", "Pass", "ResolvePass", "ScenePass", "ShadowPass", "SkyPass"]

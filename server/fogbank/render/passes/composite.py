@@ -36,7 +36,7 @@ def held_inputs_key(f) -> tuple:
     """What the held composite's inputs depend on besides the held fog (and the scene pass
     it was drawn over): the in-scattering lobe's effects and the sky's share of fog."""
     e = f.still.effects
-    return (f.held_fog.key, e.phase, e.anisotropy, e.scatter_exponent, e.scatter_start, e.shafts, e.sky_affect)
+    return (f.held_fog.key, e.phase, e.anisotropy, e.scatter_exponent, e.scatter_start, e.sky_affect)
 
 
 class CompositePass(Pass):
@@ -45,7 +45,7 @@ class CompositePass(Pass):
     was drawn over a held fog (the camera still, passes/fog.py) takes the held composite
     for the near surfaces (unless the blur is fused): what depends on the scene and the
     held fog alone is drawn once (passes/composite_inputs.frag), and each frame blends the
-    fog's moving texels (passes/composite_held.frag): by the kept depth-aware weights on
+    fog's moving texels (T, T toward the sun, in-scattered sunlight) (passes/composite_held.frag): by the kept depth-aware weights on
     the tiles that need them (passes/held_edges.frag), bilinearly on the others (the two
     draws split by a depth test against those marks: llvmpipe skips a 4x4 block that fails
     it; a branch would run both sides); its pixels with two surfaces are drawn packed and
@@ -91,7 +91,6 @@ class CompositePass(Pass):
             "uScatterStart": e.scatter_start, "uSkyDistance": e.sky_distance, "uSkyAffect": e.sky_affect,
             "uScatterExponent": e.scatter_exponent, "uBlurSigma": blur_sigma(f),
             "uPhaseHG": e.phase == "henyey-greenstein", "uAnisotropy": e.anisotropy,
-            "uShafts": e.shafts,
             "uMaxOpacity": e.max_opacity, "uBlurExponent": e.blur_exponent, **output_uniforms(look)}
         for i, prog in enumerate(progs):
             # the held composite reads only the colours and the max opacity per frame
@@ -215,8 +214,8 @@ class CompositePass(Pass):
     @staticmethod
     def _held_inputs(r, f, defines: dict):
         """The held composite's inputs over the frame's held fog, drawn if what they depend
-        on changed (held_inputs_key): the still scene pass, and the fog target's 1/distance
-        and lit share, which are the held fog's."""
+        on changed (held_inputs_key): the still scene pass, and the fog target's 1/distance,
+        which is the held fog's."""
         look, e, v, g = f.still, f.still.effects, f.view, f.gbuffer
         h = f.held_fog
         key = held_inputs_key(f)
@@ -228,8 +227,7 @@ class CompositePass(Pass):
         set_uniforms(prog, {"uFwd": v.fwd, "uRight": v.right, "uUp": v.up, "uSunDir": look.sun.direction(),
                             "uScatterStart": e.scatter_start, "uSkyDistance": e.sky_distance,
                             "uSkyAffect": e.sky_affect, "uScatterExponent": e.scatter_exponent,
-                            "uPhaseHG": e.phase == "henyey-greenstein", "uAnisotropy": e.anisotropy,
-                            "uShafts": e.shafts})
+                            "uPhaseHG": e.phase == "henyey-greenstein", "uAnisotropy": e.anisotropy})
         g.color.use(TEX["uColor"])
         g.invdist.use(TEX["uInvDist"])
         if g.sunlight is not None:

@@ -49,7 +49,7 @@ float fogRawTransmittance(vec3 O, vec3 w, float d) {
 #include "fog/density.gen.glsl"
         tau += rho;
     }
-    return exp(-max(tau, 0.0) * h);   // a carving body's negative density: see below
+    return exp(-tau * h);   // a carving body is left out of the raymarch (no density of its own)
 }
 #else
 // The whole fog's transmittance along the segment, with the global density inside and
@@ -59,14 +59,15 @@ float fogRawTransmittance(vec3 O, vec3 w, float d) {
 // here is already density * tau. Each direct transmittance (a particle's clarity, distance
 // fog's 1 - F) adds density * -log T_j to tauDirect, T_j^density: a sum of logarithms does
 // not underflow where a product would, and keeps a faint particle's digits.
-// A carving body (box, ellipsoid of negative density) takes optical depth away from the
-// exponential layers only; their sum is kept at 0 or more. The direct layers are not
-// densities and are not carved: T = exp(-(max(tau, 0) + tauDirect)). So a frame, whose
-// particles are multiplied in by their own pass, equals this inline sum.
+// A carving body (kinds/carving.py) takes its share of the other density layers' optical
+// depth over its own chords (exactly: their closed forms over those segments); the direct
+// layers are not densities and are not carved: T = exp(-(max(tau, 0) + tauDirect)), max()
+// for bodies that overlap (each removes its share). So a frame, whose particles are
+// multiplied in by their own pass, equals this inline sum.
 // The two sums along the segment Os -> P = Os + w ds (m, relative to E, w a unit
-// direction): (tau, tauDirect), the exponential layers' optical depth (a carving body's
-// is < 0) and density * -log T_j of the direct layers (>= 0).
-vec2 fogDepths(vec3 Os, vec3 w, float ds) {
+// direction): (tau, tauDirect), the exponential layers' optical depth and density * -log
+// T_j of the direct layers (>= 0); fogPlainDepths leaves the carving bodies out.
+vec2 fogPlainDepths(vec3 Os, vec3 w, float ds) {
     vec3 P = Os + w * ds;
     float tau = 0.0;
     float tauDirect = 0.0;
@@ -75,6 +76,18 @@ vec2 fogDepths(vec3 Os, vec3 w, float ds) {
     // code ~10x faster than a generic loop).
 #include "fog/layers.gen.glsl"
     return vec2(tau, tauDirect);
+}
+
+vec2 fogDepths(vec3 Os, vec3 w, float ds) {
+    vec2 t = fogPlainDepths(Os, w, ds);
+    float plainTau = t.x;
+    // the carving bodies' strengths, and what each leaves of the others' depth outside its
+    // shells (kinds/packing.py carve_code): tau = plainTau (1 - sum) + kept, with no
+    // difference of two large sums
+    float carveStrength = 0.0, carveKept = 0.0;
+#include "fog/carve.gen.glsl"
+    if (carveStrength > 0.0) t.x = plainTau * (1.0 - carveStrength) + carveKept;
+    return t;
 }
 
 // The view segment's two sums (fogDepths) from O (m, relative to E) along the unit w for

@@ -24,7 +24,6 @@
 in vec2 vUV;
 uniform sampler2D uColor;         // scene colour, linear (mipmapped when blurring: bilinear in the nearest level)
 uniform sampler2D uInvDist;       // full-resolution 1/distance
-uniform float uShafts;            // how much the view ray's shadowed share takes from the in-scattering
 uniform sampler2D uSunLight;      // the direct sunlight in the scene colour, linear
 uniform sampler2D uFarColor;      // the pixel's far surface colour, linear; a: the near surface's coverage
 uniform sampler2D uFarInvDist;    // its 1/distance
@@ -75,7 +74,7 @@ vec3 blurredScene(ivec2 px, float sigma, float invd, float sunLoss, vec2 full, v
     return wsum > 1e-6 ? acc / wsum : own;
 }
 
-// The (raw T, T toward the sun, lit share) at this pixel: the four texels by their
+// The (raw T, T toward the sun, in-scattered sunlight J) at this pixel: the four texels by their
 // weights (at full fog resolution, its own texel).
 vec3 fogT(ivec2 px, float invd) {
 #if FOG_SCALE == 1
@@ -121,7 +120,7 @@ vec4 fogged(ivec2 px, vec3 scene, vec3 sunlight, float invd, vec3 w, vec2 full, 
     float T = fogFinish(Ts.x);
     if (invd <= 0.0) T = 1.0 - uSkyAffect * (1.0 - T);   // the sky: only its share of the fog
     float sunLoss = 1.0 - Ts.y;   // the share of the direct sunlight the fog takes away
-    vec3 fog = uFogColor + uScatterColor * scatterLobe(w, invd) * mix(1.0, Ts.z, uShafts);
+    vec3 fog = fogLight(T, Ts.x, Ts.z, scatterLobe(w, invd));
 #if SUN_LIGHT
     scene -= sunLoss * sunlight;
 #endif
@@ -130,7 +129,7 @@ vec4 fogged(ivec2 px, vec3 scene, vec3 sunlight, float invd, vec3 w, vec2 full, 
         if (sigma > 0.05)   // below 0.05 px the kernel is the identity to 8 bits
             scene = blurredScene(px, sigma, invd, sunLoss, full, scene);
     }
-    return vec4(T * scene + (1.0 - T) * fog, T);
+    return vec4(T * scene + fog, T);
 }
 
 void main() {

@@ -1,24 +1,24 @@
 // A pixel's near surface under the fog from the held composite's inputs
 // (passes/composite_inputs.frag): passes/composite.frag's fogged() for a still scene and
-// a held fog, in which only the fog texels' raw T and T toward the sun move, blended by
-// the kept upsample weights. Used by passes/composite_held.frag for every pixel, and by
+// a held fog, in which only the fog texels' raw T, T toward the sun and in-scattered
+// sunlight move, blended by the kept upsample weights. Used by passes/composite_held.frag for every pixel, and by
 // the two-surface draw (passes/composite.frag HELD_NEAR) for the near surface.
 // Defined by the renderer: FOG_SCALE (1, 2, 4), SUN_LIGHT.
 uniform usampler2D uHeldAB;       // A and B as eight halves:
-                                  //   A (scene less direct sunlight, linear; in-scattering lobe x lit term)
+                                  //   A (scene less direct sunlight, linear; in-scattering lobe)
                                   //   B (direct sunlight, linear; the pixel's share of its fog)
 uniform sampler2D uHeldW;         // the four fog texels' upsample weights
 
-// The fog texels' (raw T, T toward the sun) at px by the kept weights.
-vec2 heldFogT(ivec2 px) {
+// The fog texels' (raw T, T toward the sun, in-scattered sunlight) at px by the kept weights.
+vec3 heldFogT(ivec2 px) {
 #if FOG_SCALE == 1
-    return texelFetch(uFog, px, 0).rb;
+    return texelFetch(uFog, px, 0).rba;
 #else
     vec4 w = texelFetch(uHeldW, px, 0);
     vec2 f;
     ivec2 i0 = fogQuad(px, f);
-    return w.x * fogTexelOf(i0, 0).rb + w.y * fogTexelOf(i0, 1).rb
-         + w.z * fogTexelOf(i0, 2).rb + w.w * fogTexelOf(i0, 3).rb;
+    return w.x * fogTexelOf(i0, 0).rba + w.y * fogTexelOf(i0, 1).rba
+         + w.z * fogTexelOf(i0, 2).rba + w.w * fogTexelOf(i0, 3).rba;
 #endif
 }
 
@@ -27,12 +27,13 @@ vec2 heldFogT(ivec2 px) {
 // uFog is filtered LINEAR and clamped to its edge (render/targets.py), so the texture unit
 // interpolates between the same four texels fogQuad names (a GPU's filter weights have 8
 // fractional bits: at most 1/512 of the four texels' spread off).
-vec2 heldFogTSmooth(ivec2 px) {
-    return texture(uFog, (vec2(px) + 0.5) / (float(FOG_SCALE) * vec2(textureSize(uFog, 0)))).rb;
+vec3 heldFogTSmooth(ivec2 px) {
+    return texture(uFog, (vec2(px) + 0.5) / (float(FOG_SCALE) * vec2(textureSize(uFog, 0)))).rba;
 }
 
-// (linear colour, T) of the pixel's near surface from its fog texels' (raw T, T toward the sun)
-vec4 heldNearOf(ivec2 px, vec2 Ts) {
+// (linear colour, T) of the pixel's near surface from its fog texels' (raw T, T toward the
+// sun, in-scattered sunlight)
+vec4 heldNearOf(ivec2 px, vec3 Ts) {
     uvec4 ab = texelFetch(uHeldAB, px, 0);
     vec4 a = vec4(unpackHalf2x16(ab.x), unpackHalf2x16(ab.y));
     vec4 b = vec4(unpackHalf2x16(ab.z), unpackHalf2x16(ab.w));
@@ -41,7 +42,7 @@ vec4 heldNearOf(ivec2 px, vec2 Ts) {
 #if SUN_LIGHT
     scene += Ts.y * b.rgb;   // the scene less the share 1 - T_sun of its direct sunlight
 #endif
-    return vec4(T * scene + (1.0 - T) * (uFogColor + uScatterColor * a.a), T);
+    return vec4(T * scene + fogLight(T, Ts.x, Ts.z, a.a), T);
 }
 
 // (linear colour, T) of the pixel's near surface

@@ -5,7 +5,7 @@
 //       fetches them once (llvmpipe pays about 1 ms a fetch over a 1280x720 frame, little
 //       more for 16 bytes than for 8):
 //     A: (the scene colour less its direct sunlight with SUN_LIGHT, else the scene colour;
-//         the in-scattering lobe times the lit share's term, F mix(1, lit, uShafts))
+//         the in-scattering lobe F)
 //     B: (the direct sunlight, linear; the share of its fog the pixel shows: 1 for a
 //         surface, uSkyAffect for the sky)
 //   W: the depth-aware upsample's weights of the four fog texels (fogWeights)
@@ -20,7 +20,6 @@ uniform sampler2D uColor;         // scene colour, linear
 uniform sampler2D uInvDist;       // full-resolution 1/distance, 0 = sky
 uniform sampler2D uSunLight;      // the direct sunlight in the scene colour, linear
 uniform vec3 uFwd, uRight, uUp;
-uniform float uShafts;            // how much the view ray's shadowed share takes from the in-scattering
 uniform float uSkyAffect;         // the share of its fog a sky pixel shows
 layout(location = 0) out uvec4 fAB;
 layout(location = 1) out vec4 fW;
@@ -29,23 +28,20 @@ void main() {
     ivec2 px = ivec2(gl_FragCoord.xy);
     float invd = texelFetch(uInvDist, px, 0).r;
     vec3 w = viewRay(vUV * 2.0 - 1.0, uFwd, uRight, uUp);
-    float lit;
 #if FOG_SCALE == 1
     fW = vec4(1.0, 0.0, 0.0, 0.0);
-    lit = texelFetch(uFog, px, 0).a;
 #else
     vec2 f;
     ivec2 i0 = fogQuad(px, f);
     vec4 s[4] = vec4[4](fogTexelOf(i0, 0), fogTexelOf(i0, 1), fogTexelOf(i0, 2), fogTexelOf(i0, 3));
     fW = fogWeights(s, f, invd);
-    lit = fW.x * s[0].a + fW.y * s[1].a + fW.z * s[2].a + fW.w * s[3].a;
 #endif
     vec3 scene = texelFetch(uColor, px, 0).rgb;
     vec3 sun = vec3(0.0);
 #if SUN_LIGHT
     sun = texelFetch(uSunLight, px, 0).rgb;
 #endif
-    vec4 a = vec4(scene - sun, scatterLobe(w, invd) * mix(1.0, lit, uShafts));
+    vec4 a = vec4(scene - sun, scatterLobe(w, invd));
     vec4 b = vec4(sun, invd <= 0.0 ? uSkyAffect : 1.0);
     fAB = uvec4(packHalf2x16(a.rg), packHalf2x16(a.ba), packHalf2x16(b.rg), packHalf2x16(b.ba));
 }

@@ -1,15 +1,16 @@
 // What the composites share (passes/composite.frag, composite_held.frag and
-// composite_inputs.frag): the fog target's depth-aware upsample and the in-scattering lobe.
+// composite_inputs.frag): the fog target's depth-aware upsample, the in-scattering lobe and
+// the fog's light.
 // Defined by the renderer: FOG_SCALE (1, 2, 4).
 #include "common/phase.glsl"
-uniform sampler2D uFog;           // (raw T, 1/distance, T toward the sun, lit share) at 1/FOG_SCALE size
+uniform sampler2D uFog;           // (raw T, 1/distance, T toward the sun, in-scattered sunlight J) at 1/FOG_SCALE size
 uniform vec3 uSunDir;             // unit, toward the sun
 uniform float uScatterExponent;
 uniform float uScatterStart;      // m, Gawron's ScatterStartDist (eq. 5); 0 = the view ray
 uniform bool uPhaseHG;            // the lobe: Henyey-Greenstein (true) or Gawron's power
 uniform float uAnisotropy;        // Henyey-Greenstein g
 uniform float uSkyDistance;       // m, how far a sky pixel's ray runs
-uniform vec3 uFogColor;           // linear
+uniform vec3 uFogColor;           // linear: the fog's colour in shade (lit by the sky alone)
 uniform vec3 uScatterColor;       // sun colour * intensity * scatter colour * scatter strength
 
 // Depth-aware upsample (Biri 4.3; "nearest-depth" joint bilateral), in steps that the
@@ -59,3 +60,14 @@ float scatterLobe(vec3 w, float invd) {
     return uPhaseHG ? phaseHG(mu, uAnisotropy) : pow(max(mu, 0.0), uScatterExponent);
 }
 
+
+// The light of a pixel's fog: what the sky lights, (1 - T) uFogColor, and the sunlight it
+// scatters toward the eye, the sun's colour times the lobe times J, J the fog texel's
+// in-scattered share (passes/fog.frag inScattered, with the particles' light composited
+// over it). J belongs to the raw transmittance Traw; the pixel shows the share (1 - T) /
+// (1 - Traw) of that fog (max opacity, a sky's share; T >= Traw): J scales with it. 1e-7:
+// no fog at all (Traw = 1) has J = 0, and the ratio stays finite.
+vec3 fogLight(float T, float Traw, float J, float lobe) {
+    float share = (1.0 - T) / max(1.0 - Traw, 1e-7);
+    return (1.0 - T) * uFogColor + uScatterColor * lobe * (J * share);
+}

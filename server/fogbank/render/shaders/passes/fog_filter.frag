@@ -1,15 +1,11 @@
-// The jittered fog's spatial filter: each fog texel's T, T toward the sun and lit share
-// averaged over its 3x3 neighbourhood, weighted by closeness in depth (as the composite's
-// upsample). Sampled quadratures (volume noise, light shafts) put their points at each
-// pixel's interleaved gradient noise, which spreads evenly over any 3x3 block: the mean
-// of a block is a nine-times-stratified estimate, so the jitter's grain averages out
-// instead of showing (and instead of the bands of fixed points). The inverse distance
-// is the texel's own, and so are the channels that were not sampled with a jitter: a
-// closed-form T stays exact (averaging it would blend T across silhouettes and the
-// horizon, by up to 0.13 in the default look, where only the shafts are sampled).
-uniform sampler2D uFog;           // (raw T, 1/distance, T toward the sun, lit share)
-uniform bool uFilterT;            // T and T toward the sun were sampled (volume noise)
-uniform bool uFilterLit;          // the lit share was sampled (light shafts)
+// The jittered fog's spatial filter: each fog texel's T, T toward the sun and in-scattered
+// light averaged over its 3x3 neighbourhood, weighted by closeness in depth (as the
+// composite's upsample). Volume noise puts its points at each pixel's interleaved
+// gradient noise, which spreads evenly over any 3x3 block: the mean of a block is a
+// nine-times-stratified estimate, so the jitter's grain averages out instead of showing
+// (and instead of the bands of fixed points). The in-scattered light is (1 - T) times
+// the light grid's share: it carries T's grain. The inverse distance is the texel's own.
+uniform sampler2D uFog;           // (raw T, 1/distance, T toward the sun, in-scattered light)
 layout(location = 0) out vec4 fOut;
 void main() {
     ivec2 p = ivec2(gl_FragCoord.xy);
@@ -28,5 +24,5 @@ void main() {
         }
     }
     acc /= wsum;
-    fOut = vec4(uFilterT ? acc.x : c.r, c.g, uFilterT ? acc.y : c.b, uFilterLit ? acc.z : c.a);
+    fOut = vec4(acc.x, c.g, acc.y, acc.z);
 }

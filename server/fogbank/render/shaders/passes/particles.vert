@@ -2,15 +2,45 @@
 // the pixels a particle can touch rather than particles x pixels): one instance per
 // particle, a quad over the screen bounds of its sphere of influence (radius R). A pixel
 // outside them has its segment farther than R from the particle: clarity 1 there.
-uniform sampler2D uParticles;     // (x, y, z relative to the eye, strength) per particle
+// With LIGHT, also the particle's share of the sunlight: what the fog and the other
+// particles leave of it (row 1 of uParticles, kinds/particle_light.py), times, with
+// SHADOW, how much of the particle the scene's shadow map lights (weighted by uShafts).
+uniform sampler2D uParticles;     // row 0: (x, y, z relative to the eye, strength); row 1: (sunlight share, 0, 0, 0)
 uniform vec3 uEye;                // m
 uniform int uFirst;               // this layer's first particle
 uniform float uRadius;            // m
 uniform mat4 uViewProj;
 flat out vec4 vParticle;
+flat out float vLight;
+#if SHADOW
+uniform sampler2DShadow uShadow;  // the sun's depth map (compare: 1 = lit)
+uniform mat4 uSunViewProj;        // world -> the sun's clip space
+uniform float uShadowBiasScale;   // times the full map's bias
+uniform float uShafts;            // how much the scene's shadows take from the sunlight in the fog
+
+// the share of the particle's sphere the sun lights: its centre and four points half a
+// radius out across the sun's view, each outside the map lit
+float particleShadow(vec3 c) {
+    float lit = 0.0;
+    for (int i = 0; i < 5; ++i) {
+        vec2 o = i == 0 ? vec2(0.0) : 0.5 * uRadius * vec2(i == 1 ? 1.0 : (i == 2 ? -1.0 : 0.0),
+                                                           i == 3 ? 1.0 : (i == 4 ? -1.0 : 0.0));
+        vec3 q = (uSunViewProj * vec4(c + vec3(o.x, 0.0, o.y), 1.0)).xyz * 0.5 + 0.5;
+        bool inside = all(greaterThanEqual(q, vec3(0.0))) && all(lessThanEqual(q, vec3(1.0)));
+        // 0.0015 of depth: as the light grid's samples (passes/light.frag)
+        lit += inside ? texture(uShadow, vec3(q.xy, q.z - 0.0015 * uShadowBiasScale)) : 1.0;
+    }
+    return 1.0 - uShafts * (1.0 - lit / 5.0);
+}
+#endif
+
 void main() {
     vec4 q = texelFetch(uParticles, ivec2(uFirst + gl_InstanceID, 0), 0);
     vParticle = q;
+    vLight = texelFetch(uParticles, ivec2(uFirst + gl_InstanceID, 1), 0).r;
+#if SHADOW
+    vLight *= particleShadow(uEye + q.xyz);
+#endif
     vec2 lo = vec2(1e9), hi = vec2(-1e9);
     bool behind = false;
     for (int i = 0; i < 8; ++i) {    // the corners of the sphere's bounding cube

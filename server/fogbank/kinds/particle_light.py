@@ -1,0 +1,51 @@
+"""The sunlight that reaches each of Fischer's particles, in float64: through the fog's
+density layers toward the sun (their references, the closed forms the shader takes) and
+through the other particles (Fischer's clarity of each along the particle's ray toward
+the sun), so that a swarm shades itself and smoke is dark where it is thick. The scene's
+shadow on a particle is looked up on the GPU (render/shaders/passes/particles.vert).
+
+Unitless, in [0, 1]: the share of the sun's light at the particle's centre. A particle's
+own clarity is left out (its centre is its densest point: it would shade itself to
+1 - alpha s)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from fogbank.kinds.particles import segment_distance
+from fogbank.kinds.reference import density_optical_depth
+
+# particles lit per block of the pairwise distances (memory: block x all particles)
+BLOCK = 256
+
+
+def particle_light(fog, packed, ref, time: float, sun_dir, sun_distance: float) -> np.ndarray:
+    """(MAX_PARTICLES,) float32: each packed particle's share of the sunlight (the rows of
+    packed.particles, positions relative to `ref`), 1 for rows without a particle.
+    `sun_distance` (m): how far toward the sun the fog is integrated."""
+    out = np.ones(len(packed.particles), np.float32)
+    swarms = [v for k, v in zip(packed.kinds, packed.values) if k == "particles" and v["count"] >= 1]
+    if not swarms:
+        return out
+    rows = np.concatenate([np.arange(int(v["first"]), int(v["first"] + v["count"])) for v in swarms])
+    alpha = np.concatenate([np.full(int(v["count"]), float(v["alpha"])) for v in swarms])
+    radius = np.concatenate([np.full(int(v["count"]), float(v["radius"])) for v in swarms])
+    data = packed.particles[rows].astype(np.float64)
+    pos = data[:, :3] + np.asarray(ref, dtype=np.float64)
+    strength = data[:, 3]
+    L = np.asarray(sun_dir, dtype=np.float64)
+    n = len(rows)
+    tau = density_optical_depth(fog, pos, np.broadcast_to(L, (n, 3)), np.full(n, sun_distance),
+                                np.full(n, time))
+    log_clear = np.zeros(n)
+    alive = strength > 0
+    for lo in range(0, n, BLOCK):
+        hi = min(n, lo + BLOCK)
+        dist = segment_distance(pos[alive], pos[lo:hi], np.broadcast_to(L, (hi - lo, 3)),
+                                np.full(hi - lo, sun_distance))
+        opacity = (alpha[alive] * strength[alive])[None, :] * np.clip(1.0 - dist / radius[alive][None, :], 0.0, 1.0)
+        own = np.flatnonzero(alive)[None, :] == np.arange(lo, hi)[:, None]
+        opacity = np.where(own, 0.0, np.minimum(opacity, 1.0 - 1e-12))
+        log_clear[lo:hi] = np.log1p(-opacity).sum(axis=1)
+    out[rows] = np.exp(-tau + max(fog.density, 0.0) * log_clear)
+    return out
