@@ -171,17 +171,27 @@ def test_ellipsoid_is_the_sphere_when_round_and_scales_with_its_radii():
     assert got == pytest.approx(0.5 * 7.0 * 4.0 / 3.0, rel=1e-12)
 
 
-def test_negative_density_carves_and_the_total_stays_nonnegative():
+def test_a_carving_body_removes_fog_only_inside_itself():
+    """carve: the share of the other layers' fog a body removes over its own chord, and
+    nowhere else (a negative density took the same depth from fog anywhere on the ray)."""
+    from pydantic import ValidationError
     from fogbank.kinds.homogeneous import Homogeneous
     from fogbank.kinds.reference import transmittance
     from fogbank.model.params import FogParams
-    fog = FogParams(layers=[Homogeneous(density=0.02).model_dump(),
-                            Box(center=(0.0, 0.0, 0.0), half_size=(5.0, 5.0, 5.0), density=-0.02).model_dump()])
+    box = Box(center=(0.0, 0.0, 0.0), half_size=(5.0, 5.0, 5.0), carve=1.0).model_dump()
+    fog = FogParams(layers=[Homogeneous(density=0.02).model_dump(), box])
     O, w = np.array([[-50.0, 0.0, 0.0]]), np.array([[1.0, 0.0, 0.0]])
     # 100 m of fog, 10 of them carved out: T = exp(-0.02 * 90)
     assert transmittance(fog, O, w, np.array([100.0]), 0.0)[0] == pytest.approx(np.exp(-0.02 * 90), rel=1e-12)
-    carve = FogParams(layers=[Box(center=(0.0, 0.0, 0.0), half_size=(5.0, 5.0, 5.0), density=-1.0).model_dump()])
-    assert transmittance(carve, O, w, np.array([100.0]), 0.0)[0] == 1.0
+    half = FogParams(layers=[Homogeneous(density=0.02).model_dump(), {**box, "carve": 0.5}])
+    assert transmittance(half, O, w, np.array([100.0]), 0.0)[0] == pytest.approx(np.exp(-0.02 * 95), rel=1e-12)
+    # a ray that stops short of the body, or passes beside it, keeps all its fog
+    assert transmittance(fog, O, w, np.array([40.0]), 0.0)[0] == pytest.approx(np.exp(-0.02 * 40), rel=1e-12)
+    assert transmittance(fog, O + [0.0, 6.0, 0.0], w, np.array([100.0]), 0.0)[0] == pytest.approx(np.exp(-2.0))
+    # alone it carves nothing: no fog, and none added
+    assert transmittance(FogParams(layers=[box]), O, w, np.array([100.0]), 0.0)[0] == 1.0
+    with pytest.raises(ValidationError, match="carve"):
+        Box(density=-0.02)
 
 
 @pytest.mark.parametrize("kind", sorted(MODULES))

@@ -96,6 +96,11 @@ class Effects(Strict):
     sky_affect: float = num(1.0, 0, 1, 0.01, "", "how much of its fog the sky shows (Godot's sky "
                             "affect): 1 = all of it, 0 = an unfogged sky; its T becomes "
                             "1 - sky_affect (1 - T)", group="Distance and sky")
+    aerial_perspective: float = num(0.0, 0, 1, 0.01, "", "the sky in the fog (Godot's aerial perspective): "
+                                    "how much the fog's colour is the sky's in the direction of view instead of "
+                                    "fog_color, the sky's mean near the eye, its colour toward the horizon at the "
+                                    "sky distance (distant land fades into the sky; no horizon line)",
+                                    group="Distance and sky")
     scatter: float = num(0.6, 0, 10, 0.005, "", "sun in-scattering strength (Gawron 3.2)", group="Light")
     scatter_exponent: float = num(8.0, 0.1, 256, 0.1, "", "in-scattering falloff", group="Light")
     scatter_color: Color = Field("#ffffff", json_schema_extra=grouped("Light"), description="Gawron's ScatterColor, as a tint of the "

@@ -68,13 +68,14 @@ class RayCaster:
         extra = {"SUN_THROUGH_FOG": 1} if e.lit else {}
         prog = r.programs.get("passes/fullscreen.vert", "passes/light.frag", variant(fog), inline_particles=True,
                               RAYS_PER_ROW=RAYS_PER_ROW, LIGHT_RAYS=1, SLICES=LIGHT_RAY_SLICES, SHADOW_TAPS=taps,
-                              LIT=int(e.lit), LIGHT_STAGE=0, LIGHT_CURVE_M=f"{LIGHT_CURVE_M:.1f}", **extra)
+                              LIT=int(e.lit), LIGHT_STAGE=0, LIGHT_CURVE_M=f"{LIGHT_CURVE_M:.1f}",
+                              AERIAL=int(e.aerial_perspective > 0), **extra)
         set_uniforms(prog, {"uSlices": LIGHT_RAY_SLICES, "uSunDir": fog.sun.direction(), "uSkyDistance": e.sky_distance,
                             "uFogColor": np.array(srgb_to_linear(fog.fog_color)),
                             "uScatterColor": sun_color(fog) * np.array(srgb_to_linear(e.scatter_color)) * e.scatter,
                             "uScatterExponent": e.scatter_exponent, "uScatterStart": e.scatter_start,
                             "uPhaseHG": e.phase == "henyey-greenstein", "uAnisotropy": e.anisotropy,
-                            "uMaxOpacity": e.max_opacity})
+                            "uMaxOpacity": e.max_opacity, "uAerial": e.aerial_perspective})
         if taps:
             sm = shadow_map(r, fog)
             set_uniforms(prog, {"uSunViewProj": sun_view_proj(r, fog), "uShafts": e.shafts,

@@ -10,7 +10,7 @@ import numpy as np
 from fogbank.model.params import Camera  # the type only: scene reads the model, never the reverse
 
 NEAR = 0.25   # m
-FAR = 4000.0  # m
+FAR = 150000.0  # m: the far land reaches 120 km (scene/meshes.py SKIRT_OUTER), past the horizon seen from the camera bounds (101 km from 800 m); a 24-bit depth resolves 0.24 m at 1 km whatever the far plane, set by the near one
 
 
 @dataclass(frozen=True)

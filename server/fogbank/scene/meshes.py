@@ -488,7 +488,7 @@ def _objects() -> tuple[np.ndarray, int, np.ndarray]:
 # SKIRT_OUTER (within the camera's far plane). The cells along the edge are fans onto the
 # detailed grid's own edge vertices, so the two meshes share every seam vertex: no crack,
 # and no overlap for a coarse facet to poke through.
-SKIRT_OUTER = 3500.0
+SKIRT_OUTER = 120000.0
 SKIRT_GROWTH = 1.3
 SKIRT_INNER_CELLS = 7   # coarse cells along each side of the detailed square
 

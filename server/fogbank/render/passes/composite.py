@@ -18,6 +18,8 @@ from fogbank.render.targets import FAR_LIST_WIDTH, SILHOUETTE_TILE
 
 BLUR_MODES = {"off": 0, "single": 1, "separate": 2}
 HELD_UNIFORMS = ("uFogColor", "uScatterColor", "uMaxOpacity", "uExposureScale")
+# and with aerial perspective, what the fog's colour per pixel needs (composite_held.glsl)
+HELD_AERIAL_UNIFORMS = ("uFwd", "uRight", "uUp", "uAerial", "uSkyDistance")
 # A held composite's 4x4 tile blends its fog bilinearly unless a pixel's kept depth-aware
 # weight differs from its bilinear one by more than this (passes/held_edges.frag). At
 # 1280x720 of the default look 0.01 leaves 16% of the tiles to the kept weights (0.002:
@@ -60,7 +62,9 @@ class CompositePass(Pass):
         mode = BLUR_MODES[e.blur]
         sun = f.gbuffer.sunlight is not None
         g = f.gbuffer
-        defines = dict(FOG_SCALE=e.fog_scale, BLUR_MODE=mode, SUN_LIGHT=int(sun), **output_defines(look))
+        aerial = e.aerial_perspective > 0
+        defines = dict(FOG_SCALE=e.fog_scale, BLUR_MODE=mode, SUN_LIGHT=int(sun), AERIAL=int(aerial),
+                       **output_defines(look))
         held = f.held_fog is not None and mode != BLUR_MODES["single"]
         smooth = held and e.fog_scale > 1   # the held composite's bilinear draw
         if held:
@@ -91,10 +95,12 @@ class CompositePass(Pass):
             "uScatterStart": e.scatter_start, "uSkyDistance": e.sky_distance, "uSkyAffect": e.sky_affect,
             "uScatterExponent": e.scatter_exponent, "uBlurSigma": blur_sigma(f),
             "uPhaseHG": e.phase == "henyey-greenstein", "uAnisotropy": e.anisotropy,
-            "uMaxOpacity": e.max_opacity, "uBlurExponent": e.blur_exponent, **output_uniforms(look)}
+            "uMaxOpacity": e.max_opacity, "uBlurExponent": e.blur_exponent, "uAerial": e.aerial_perspective,
+            **output_uniforms(look)}
+        held_names = HELD_UNIFORMS + (HELD_AERIAL_UNIFORMS if aerial else ())
         for i, prog in enumerate(progs):
             # the held composite reads only the colours and the max opacity per frame
-            set_uniforms(prog, {k: uniforms[k] for k in HELD_UNIFORMS} if i < n_held else uniforms)
+            set_uniforms(prog, {k: uniforms[k] for k in held_names} if i < n_held else uniforms)
         if held:   # the held composite and, for the near surface, the two-surface draw
             for name, tex in zip(("uHeldAB", "uHeldW"), inputs.color_attachments):
                 tex.use(TEX[name])

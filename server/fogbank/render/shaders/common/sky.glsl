@@ -1,11 +1,30 @@
+// The clear sky's colours, linear RGB: at the zenith, at the horizon, and of the land
+// seen far below the horizon (a distant green under haze, where no mesh reaches).
+const vec3 SKY_ZENITH = vec3(0.16, 0.32, 0.62);
+const vec3 SKY_HORIZON = vec3(0.62, 0.70, 0.80);
+const vec3 SKY_GROUND = vec3(0.19, 0.24, 0.16);
+
+// The sky's gradient without the sun, w a unit direction: zenith to horizon above, horizon
+// to the distant land below.
+vec3 skyGradient(vec3 w) {
+    float up = clamp(w.y, -1.0, 1.0);
+    return up >= 0.0 ? mix(SKY_HORIZON, SKY_ZENITH, pow(up, 0.55)) : mix(SKY_HORIZON, SKY_GROUND, pow(-up, 0.4));
+}
+
+// The sky's colour as haze in the fog (the composite's aerial perspective), w a unit view
+// direction: the gradient above the horizon (a downward ray's fog is lit by the sky above
+// it: the horizon's colour), toward its mean over the upper hemisphere (up^0.55 averages
+// 1 / 1.55 over the hemisphere's solid angle) as `far` goes from 1 to 0: a fog near the eye
+// is lit by the whole sky, far off it takes the colour of the sky behind it.
+vec3 skyHaze(vec3 w, float far) {
+    vec3 sky = mix(SKY_HORIZON, SKY_ZENITH, pow(max(w.y, 0.0), 0.55));
+    return mix(mix(SKY_HORIZON, SKY_ZENITH, 1.0 / 1.55), sky, far);
+}
+
 // A clear-sky gradient with a sun disk and glow, linear RGB. w: unit view direction,
 // L: unit direction to the sun, sun: sun colour times intensity.
 vec3 skyColor(vec3 w, vec3 L, vec3 sun) {
-    float up = clamp(w.y, -1.0, 1.0);
-    vec3 zenith = vec3(0.16, 0.32, 0.62);
-    vec3 horizon = vec3(0.62, 0.70, 0.80);
-    vec3 ground = vec3(0.30, 0.30, 0.28);
-    vec3 c = up >= 0.0 ? mix(horizon, zenith, pow(up, 0.55)) : mix(horizon, ground, pow(-up, 0.4));
+    vec3 c = skyGradient(w);
     float cosSun = max(dot(w, L), 0.0);
     c += sun * (0.05 * pow(cosSun, 8.0) + 0.25 * pow(cosSun, 180.0));
     c += sun * smoothstep(0.99985, 0.99995, cosSun);    // the disk, ~0.8 deg across

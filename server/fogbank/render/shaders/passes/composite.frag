@@ -23,12 +23,10 @@
 #endif
 in vec2 vUV;
 uniform sampler2D uColor;         // scene colour, linear (mipmapped when blurring: bilinear in the nearest level)
-uniform sampler2D uInvDist;       // full-resolution 1/distance
 uniform sampler2D uSunLight;      // the direct sunlight in the scene colour, linear
 uniform sampler2D uFarColor;      // the pixel's far surface colour, linear; a: the near surface's coverage
 uniform sampler2D uFarInvDist;    // its 1/distance
 uniform sampler2D uFarSunLight;   // its direct sunlight, linear
-uniform vec3 uFwd, uRight, uUp;
 uniform float uSkyAffect;         // the share of its fog a sky pixel shows (Godot's sky affect)
 uniform float uBlurSigma;         // px at full fog
 uniform float uBlurExponent;
@@ -120,7 +118,7 @@ vec4 fogged(ivec2 px, vec3 scene, vec3 sunlight, float invd, vec3 w, vec2 full, 
     float T = fogFinish(Ts.x);
     if (invd <= 0.0) T = 1.0 - uSkyAffect * (1.0 - T);   // the sky: only its share of the fog
     float sunLoss = 1.0 - Ts.y;   // the share of the direct sunlight the fog takes away
-    vec3 fog = fogLight(T, Ts.x, Ts.z, scatterLobe(w, invd));
+    vec3 fog = fogLight(T, Ts.x, Ts.z, scatterLobe(w, invd), fogAmbient(w, invd));
 #if SUN_LIGHT
     scene -= sunLoss * sunlight;
 #endif

@@ -3,7 +3,7 @@
 // a held fog, in which only the fog texels' raw T, T toward the sun and in-scattered
 // sunlight move, blended by the kept upsample weights. Used by passes/composite_held.frag for every pixel, and by
 // the two-surface draw (passes/composite.frag HELD_NEAR) for the near surface.
-// Defined by the renderer: FOG_SCALE (1, 2, 4), SUN_LIGHT.
+// Defined by the renderer: FOG_SCALE (1, 2, 4), SUN_LIGHT, AERIAL.
 uniform usampler2D uHeldAB;       // A and B as eight halves:
                                   //   A (scene less direct sunlight, linear; in-scattering lobe)
                                   //   B (direct sunlight, linear; the pixel's share of its fog)
@@ -42,7 +42,15 @@ vec4 heldNearOf(ivec2 px, vec3 Ts) {
 #if SUN_LIGHT
     scene += Ts.y * b.rgb;   // the scene less the share 1 - T_sun of its direct sunlight
 #endif
-    return vec4(T * scene + fogLight(T, Ts.x, Ts.z, a.a), T);
+#if AERIAL
+    // the fog's colour depends on the view ray and the distance: per pixel (uInvDist is the
+    // held scene pass's)
+    vec3 w = viewRay((vec2(px) + 0.5) / vec2(textureSize(uHeldAB, 0)) * 2.0 - 1.0, uFwd, uRight, uUp);
+    vec3 ambient = fogAmbient(w, texelFetch(uInvDist, px, 0).r);
+#else
+    vec3 ambient = uFogColor;
+#endif
+    return vec4(T * scene + fogLight(T, Ts.x, Ts.z, a.a, ambient), T);
 }
 
 // (linear colour, T) of the pixel's near surface

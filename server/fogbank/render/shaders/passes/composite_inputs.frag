@@ -17,9 +17,7 @@
 #include "passes/composite_parts.glsl"
 in vec2 vUV;
 uniform sampler2D uColor;         // scene colour, linear
-uniform sampler2D uInvDist;       // full-resolution 1/distance, 0 = sky
 uniform sampler2D uSunLight;      // the direct sunlight in the scene colour, linear
-uniform vec3 uFwd, uRight, uUp;
 uniform float uSkyAffect;         // the share of its fog a sky pixel shows
 layout(location = 0) out uvec4 fAB;
 layout(location = 1) out vec4 fW;

@@ -1,9 +1,16 @@
 // What the composites share (passes/composite.frag, composite_held.frag and
 // composite_inputs.frag): the fog target's depth-aware upsample, the in-scattering lobe and
 // the fog's light.
-// Defined by the renderer: FOG_SCALE (1, 2, 4).
+// Defined by the renderer: FOG_SCALE (1, 2, 4), AERIAL (0 or 1).
+#ifndef AERIAL
+#define AERIAL 0
+#endif
+#include "common/camera.glsl"
 #include "common/phase.glsl"
+#include "common/sky.glsl"
 uniform sampler2D uFog;           // (raw T, 1/distance, T toward the sun, in-scattered sunlight J) at 1/FOG_SCALE size
+uniform sampler2D uInvDist;       // full-resolution 1/distance (1/m), 0 = sky
+uniform vec3 uFwd, uRight, uUp;   // camera basis, right/up scaled by tan(fov/2)
 uniform vec3 uSunDir;             // unit, toward the sun
 uniform float uScatterExponent;
 uniform float uScatterStart;      // m, Gawron's ScatterStartDist (eq. 5); 0 = the view ray
@@ -11,6 +18,7 @@ uniform bool uPhaseHG;            // the lobe: Henyey-Greenstein (true) or Gawro
 uniform float uAnisotropy;        // Henyey-Greenstein g
 uniform float uSkyDistance;       // m, how far a sky pixel's ray runs
 uniform vec3 uFogColor;           // linear: the fog's colour in shade (lit by the sky alone)
+uniform float uAerial;            // effects.aerial_perspective: the sky's share of the fog's colour
 uniform vec3 uScatterColor;       // sun colour * intensity * scatter colour * scatter strength
 
 // Depth-aware upsample (Biri 4.3; "nearest-depth" joint bilateral), in steps that the
@@ -67,7 +75,21 @@ float scatterLobe(vec3 w, float invd) {
 // over it). J belongs to the raw transmittance Traw; the pixel shows the share (1 - T) /
 // (1 - Traw) of that fog (max opacity, a sky's share; T >= Traw): J scales with it. 1e-7:
 // no fog at all (Traw = 1) has J = 0, and the ratio stays finite.
-vec3 fogLight(float T, float Traw, float J, float lobe) {
+vec3 fogLight(float T, float Traw, float J, float lobe, vec3 ambient) {
     float share = (1.0 - T) / max(1.0 - Traw, 1e-7);
-    return (1.0 - T) * uFogColor + uScatterColor * lobe * (J * share);
+    return (1.0 - T) * ambient + uScatterColor * lobe * (J * share);
+}
+
+// The fog's colour lit by the sky along the unit view ray w to a surface at 1/distance
+// invd (0: the sky): uFogColor, and with aerial perspective (AERIAL) the sky's haze in
+// that direction for the share uAerial (common/sky.glsl skyHaze), blurred toward the sky's
+// mean for fog near the eye (Godot samples its sky's radiance at a mip by depth likewise).
+// The distant land and the sky just above the horizon then meet in the same colour.
+vec3 fogAmbient(vec3 w, float invd) {
+#if AERIAL
+    float d = invd > 0.0 ? 1.0 / invd : uSkyDistance;
+    return mix(uFogColor, skyHaze(w, clamp(d / uSkyDistance, 0.0, 1.0)), uAerial);
+#else
+    return uFogColor;
+#endif
 }

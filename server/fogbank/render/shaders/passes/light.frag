@@ -49,13 +49,13 @@
 #include "common/dither.glsl"
 #define LIGHT_GRID_NO_LOOKUP 1
 #include "fog/light_grid.glsl"
-uniform vec3 uFwd, uRight, uUp;   // camera basis, right/up scaled by tan(fov/2)
 #ifdef LIGHT_RAYS
 #define FOG_SCALE 1
 #include "fog/finish.glsl"
-// composite_parts declares uSunDir and uSkyDistance too
+// composite_parts declares uSunDir, uSkyDistance and the camera basis too
 #include "passes/composite_parts.glsl"
 #else
+uniform vec3 uFwd, uRight, uUp;   // camera basis, right/up scaled by tan(fov/2)
 uniform vec3 uSunDir;             // unit, toward the sun
 uniform float uSkyDistance;       // m: how far a point's ray toward the sun runs
 #endif
@@ -225,7 +225,8 @@ void main() {
     J *= W > 0.0 ? (1.0 - T0) / W : 0.0;   // the march's J as a share of its weights, times the opacity
     float T = fogTransmittance(vec3(0.0), w, d);
     fRay = vec4(T, J, T0, 0.0);
-    fLight = vec4(fogLight(T, fogRawTransmittance(vec3(0.0), w, d), J, scatterLobe(w, d > 0.0 ? 1.0 / d : 0.0)), 0.0);
+    float invd = d > 0.0 ? 1.0 / d : 0.0;
+    fLight = vec4(fogLight(T, fogRawTransmittance(vec3(0.0), w, d), J, scatterLobe(w, invd), fogAmbient(w, invd)), 0.0);
 }
 #elif LIGHT_STAGE == 1
 void main() {

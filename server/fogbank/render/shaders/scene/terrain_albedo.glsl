@@ -19,12 +19,21 @@ float valueNoise(vec2 p) {
 
 float riverX(float z) { return 10.0 + 22.0 * sin(z / 70.0); }
 
+const float EXTENT = 220.0;   // the detailed terrain's half side (scene/terrain.py)
+
 vec3 terrainAlbedo(vec3 p, vec3 n) {
     float v = valueNoise(p.xz * 0.05) * 0.6 + valueNoise(p.xz * 0.21) * 0.4;
     vec3 grass = mix(vec3(0.10, 0.19, 0.05), vec3(0.21, 0.29, 0.08), v);
     vec3 c = grass;
-    float bank = smoothstep(9.0, 6.5, abs(p.x - riverX(p.z)));
+    // the river's banks, their edges widened to the pixel's footprint (fwidth) so that far
+    // off they fade into the grass instead of breaking into dashes
+    float dx = abs(p.x - riverX(p.z)), fw = fwidth(p.x - riverX(p.z));
+    float bank = smoothstep(9.0 + fw, 6.5 - fw, dx) * clamp(2.5 / max(fw, 1e-3), 0.0, 1.0);
     c = mix(c, vec3(0.36, 0.31, 0.22), bank);
+    // beyond the detailed land the coarse far land has no channel: the river's own width
+    // takes the water's dark colour there, so that the river runs on to the horizon
+    float far = step(EXTENT, max(abs(p.x), abs(p.z)));
+    c = mix(c, vec3(0.03, 0.08, 0.10), far * smoothstep(7.5 + fw, 5.0 - fw, dx));
     c = mix(c, vec3(0.26, 0.25, 0.23), smoothstep(0.82, 0.7, n.y));
     // road edge antialiased over one screen pixel
     float e = abs(p.z - ROAD_Z) - ROAD_HALF_WIDTH;
