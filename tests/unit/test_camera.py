@@ -56,7 +56,7 @@ def test_the_planes_of_a_hand_made_frustum():
     side = lambda p: planes[:, :3] @ np.asarray(p, float) + planes[:, 3]  # noqa: E731
     assert bool((side([0, 0, -10]) > 0).all()) == True   # noqa: E712
     assert side([0, 0, 10])[4] < 0          # near
-    assert side([0, 0, -5000])[5] < 0       # beyond the far plane (4000 m)
+    assert side([0, 0, -cam.FAR - 1000.0])[5] < 0   # beyond the far plane
     assert side([11, 0, -10])[1] < 0        # right of x = -z
     assert side([0, -11, -10])[2] < 0       # below y = z
     radius = 1.0

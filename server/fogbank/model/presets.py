@@ -33,30 +33,42 @@ def _biri_fig6_layer(density: float = 0.012, scale: float = 150.0) -> dict:
                       {"amp": 0.05, "k": (PI, 0.0, -PI / 2), "phase": 0.0}]}
 
 
+# The look most presets share: light in the fog (single scattering: each point lit by the
+# sun through the fog toward it and shadowed by the scene), the sky in the fog at distance,
+# and a filmic tone map that rolls the sun's glow off instead of clipping it. The papers'
+# own flat fog is one switch away (effects.lit off, effects.shafts 0, tone_map "none").
+LIT = {"lit": True, "shafts": 1.0, "sun_through_fog": True, "tone_map": "neutral", "aerial_perspective": 0.6,
+       "phase": "henyey-greenstein", "anisotropy": 0.55}
+
+
+def lit(**effects) -> dict:
+    return {**LIT, **effects}
+
+
 def _presets() -> dict[str, dict[str, Any]]:
     hx, hy, hz = landmarks().house
     bx, by, bz = landmarks().bridge
     fx, fy, fz = landmarks().forest
     view = {"position": (-15.0, 34.0, 95.0), "yaw": 5.0, "pitch": -13.0, "fov": 60.0}
     house_view = {"position": (-58.0, 22.0, 12.0), "yaw": 25.0, "pitch": -8.0, "fov": 55.0}
-    smoke = {"kind": "particles", "count": 64, "emitter": _house_chimney(), "direction": (0.0, 1.0, 0.0),
-             "spread": 12.0, "speed": 2.2, "life_min": 8, "life_max": 16, "step": 0.45,
-             "radius": 1.6, "alpha": 0.85, "drag": 0.35, "gravity": 0.3, "wind": True, "seed": 3}
+    cx, cy, cz = _house_chimney()
+    smoke = {"kind": "particles", "count": 96, "emitter": (cx, cy + 0.8, cz), "direction": (0.0, 1.0, 0.0),
+             "spread": 14.0, "speed": 2.4, "life_min": 16, "life_max": 36, "step": 0.3,
+             "radius": 1.7, "alpha": 0.7, "drag": 0.45, "gravity": 0.5, "wind": True, "seed": 3}
     return {
         "default": {
             "title": "Valley mist at sunrise",
             "source": "fogbank's own mix: exponential height fog (Unreal, Filament), Biri et al. 2002 cosines and a point potential, Fischer's particles, Gawron's and Henyey-Greenstein's in-scattering",
             "description": "A low sun through ground mist pooled in the river valley (height fog), "
                            "drifting Biri cosine layers, denser air in the forest (a point "
-                           "potential) and chimney smoke; Henyey-Greenstein in-scattering, the "
-                           "sunlight dimmed by the fog, and sampled light shafts between the trees.",
+                           "potential) and chimney smoke, all lit by the sun through the fog: "
+                           "the trees' shadows fall through the mist as shafts, the smoke shades "
+                           "itself, and the far hills fade into the sky.",
             "params": {
                 "camera": {"position": (-35.0, 36.0, 85.0), "yaw": 30.0, "pitch": -11.0, "fov": 60.0},
-                "fog_color": "#aab6c2",
+                "fog_color": "#8593a4",
                 "sun": {"azimuth": 30.0, "elevation": 9.0, "color": "#ffd9a8", "intensity": 3.4},
-                "effects": {"phase": "henyey-greenstein", "anisotropy": 0.6, "scatter": 0.04,
-                            "shafts": 1.0, "sun_through_fog": True, "sky_distance": 400.0,
-                            "fog_scale": 2},
+                "effects": lit(anisotropy=0.6, scatter=0.07, sky_distance=400.0, fog_scale=2),
                 "layers": [
                     {"kind": "height", "density": 0.025, "falloff": 0.2, "base": 1.0},
                     _biri_fig6_layer(0.0025, 24.0),
@@ -71,41 +83,58 @@ def _presets() -> dict[str, dict[str, Any]]:
             "source": "Biri, Michelin & Arquès, Real-Time Animation of Realistic Fog (2002): figure 6, section 3.2.1",
             "description": "Layers of mist from four cosine functions plus one constant (the "
                            "product term expanded into two cosines), 150 m per function unit: "
-                           "dense in the valley, clear on the hilltops, tilted and drifting.",
-            "params": {"camera": view, "layers": [_biri_fig6_layer()],
-                       "effects": {"cutoff_distance": 500.0, "cutoff_mode": "fog"}},
+                           "bands of mist stacked up the valley's sides, lit from above and "
+                           "shaded beneath, clear between them, tilted and drifting with the wind.",
+            "params": {"camera": view,
+                       "sun": {"azimuth": 210.0, "elevation": 28.0},
+                       "fog_color": "#7c8794",
+                       "layers": [_biri_fig6_layer(0.015)],
+                       "effects": lit(scatter=0.12, anisotropy=0.4, sky_distance=250.0, cutoff_distance=240.0,
+                                      cutoff_mode="fog")},
         },
         "biri-fig7": {
             "title": "Biri et al. 2002, figure 7",
-            "source": "Biri, Michelin & Arquès 2002: figure 7, section 3.2.2",
+            "source": "Biri, Michelin & Arquès 2002: figure 7 (and figure 5's wind), section 3.2.2",
             "description": "Two fourth-degree polynomials {0.8, -1, 0, 0, 1} on X and Z, mirrored "
                            "at their tile borders (no seam), their minimum on the house: its middle "
-                           "is clear, its ends in mist.",
-            "params": {"camera": house_view,
-                       "effects": {"cutoff_distance": 500.0, "cutoff_mode": "fog"},
+                           "is clear, its ends in mist. The wind slides the Z waves along "
+                           "(figure 5's animation by the phase), the house's clear middle stays.",
+            "params": {"camera": {"position": (hx, hy + 5.0, hz + 60.0), "yaw": 0.0, "pitch": -3.0,
+                                  "fov": 32.0},
+                       "sun": {"azimuth": 150.0, "elevation": 35.0},
+                       "wind": {"direction": 0.0, "speed": 3.0},
+                       "fog_color": "#8b95a1",
+                       "effects": lit(scatter=0.12, sky_distance=250.0, cutoff_distance=240.0, cutoff_mode="fog"),
                        "layers": [
-                           {"kind": "polynomial", "density": 0.014, "coeffs": [0.8, -1.0, 0.0, 0.0, 1.0],
-                            "axis": (1 / 12.0, 0.0, 0.0), "offset": 0.63 - hx / 12.0, "half_width": 1.0},
-                           {"kind": "polynomial", "density": 0.014, "coeffs": [0.8, -1.0, 0.0, 0.0, 1.0],
-                            "axis": (0.0, 0.0, 1 / 12.0), "offset": 0.63 - hz / 12.0, "half_width": 1.0}]},
+                           {"kind": "polynomial", "density": 0.045, "coeffs": [0.8, -1.0, 0.0, 0.0, 1.0],
+                            "axis": (1 / 11.6, 0.0, 0.0), "offset": 0.63 - hx / 11.6, "half_width": 1.0},
+                           {"kind": "polynomial", "density": 0.012, "coeffs": [0.8, -1.0, 0.0, 0.0, 1.0],
+                            "axis": (0.0, 0.0, 1 / 12.0), "offset": 0.63 - hz / 12.0, "half_width": 1.0,
+                            "wind": True}]},
         },
         "biri-fig8": {
             "title": "Biri et al. 2002, figure 8",
             "source": "Biri, Michelin & Arquès 2002: figure 8, section 3.2.3 (eq. 9)",
             "description": "Thin constant fog with four tight point potentials centred on trees: the mist "
-                           "gathers around them.",
+                           "gathers around them, lit where the sun reaches it.",
             "params": {"camera": {"position": (30.0, 35.0, 60.0), "yaw": 7.0, "pitch": -10.0, "fov": 55.0},
-                       "effects": {"cutoff_distance": 500.0, "cutoff_mode": "fog"},
-                       "layers": [{"kind": "homogeneous", "density": 0.003}] + [
-                           {"kind": "potential", "shape": "point", "center": c, "strength": 0.35,
-                            "c": 2.5, "e": 0.1} for c in landmarks().trees]},
+                       "sun": {"azimuth": 150.0, "elevation": 22.0},
+                       "fog_color": "#7f8a97",
+                       "effects": lit(scatter=0.12, sky_distance=250.0, cutoff_distance=240.0, cutoff_mode="fog"),
+                       "layers": [{"kind": "homogeneous", "density": 0.0015}] + [
+                           {"kind": "potential", "shape": "point", "center": c, "strength": 0.5,
+                            "c": 2.0, "e": 0.25} for c in landmarks().trees]},
         },
         "quilez-spheres": {
             "title": "Quilez: analytic fog spheres",
             "source": "Inigo Quilez, analytically integrated volumetric media (no raymarching)",
             "description": "Spheres of fog, density 1 - r^2, integrated in closed form and "
-                           "clipped by the depth buffer.",
-            "params": {"camera": view, "layers": [
+                           "clipped by the depth buffer, lit by the sun through themselves: "
+                           "bright on the sun's side, shaded on the other.",
+            "params": {"camera": view, "sun": {"azimuth": 250.0, "elevation": 25.0},
+                       "effects": lit(scatter=0.25, anisotropy=0.3, aerial_perspective=0.4),
+                       "fog_color": "#7a8595",
+                       "layers": [
                 {"kind": "sphere", "center": (hx, hy, hz), "radius": 16.0, "density": 0.12},
                 {"kind": "sphere", "center": (bx, by + 2.0, bz), "radius": 14.0, "density": 0.15},
                 {"kind": "sphere", "center": (fx, fy, fz), "radius": 30.0, "density": 0.06}]},
@@ -114,8 +143,13 @@ def _presets() -> dict[str, dict[str, Any]]:
             "title": "Fischer: particle fog",
             "source": "Cameron Fischer, Clouds, Fog, and Smoke",
             "description": "Ground fog over the river from 400 free particles born along it "
-                           "(life 64-128 steps, max opacity 0.2 each), drifting with the wind.",
+                           "(life 64-128 steps, max opacity 0.2 each), drifting with the wind; "
+                           "a low sun from the west leaves the valley floor in the hills' shade, "
+                           "and the fog there is darker than the fog in the sun.",
             "params": {"camera": view, "time": 40.0, "wind": {"direction": 100.0, "speed": 0.8},
+                       "sun": {"azimuth": 255.0, "elevation": 10.0},
+                       "fog_color": "#66717f",
+                       "effects": lit(scatter=0.2, anisotropy=0.3),
                        "layers": [{"kind": "particles", "count": 400, "emitter": (10.0, 1.5, -15.0),
                                    "emitter_size": (16.0, 1.0, 85.0),
                                    "direction": (0.0, 1.0, 0.0), "spread": 80.0, "speed": 0.3,
@@ -126,43 +160,59 @@ def _presets() -> dict[str, dict[str, Any]]:
         "fischer-smoke": {
             "title": "Fischer: chimney smoke",
             "source": "Cameron Fischer, Clouds, Fog, and Smoke",
-            "description": "Smoke from a few particles (life 8-16 steps, opacity near 1) out of "
-                           "the house's chimney, bent by the wind.",
-            "params": {"camera": house_view, "time": 12.0, "wind": {"direction": 80.0, "speed": 2.0},
+            "description": "Smoke from 96 particles out of the house's chimney, rising warm and "
+                           "spreading as it goes, bent over by the wind: dark where it is thick "
+                           "(it shades itself), lit on the sun's side.",
+            "params": {"camera": house_view, "time": 12.0, "wind": {"direction": 80.0, "speed": 2.5},
+                       "sun": {"azimuth": 120.0, "elevation": 30.0},
+                       "fog_color": "#8c929a",
+                       "effects": lit(scatter=0.3, anisotropy=0.3, aerial_perspective=0.0, shafts=1.0),
                        "layers": [smoke]},
         },
         "perlin-fog": {
-            "title": "Perlin fog with height falloff",
-            "source": "Perlin Fog (course project write-up)",
-            "description": "The course write-up's fog: baked fractal Perlin noise, "
-                           "f = exp(-rho d n), n -> n dY^2 / 2 + 0.001, drifting with the wind.",
-            "params": {"camera": {"position": (-30.0, 60.0, 120.0), "yaw": 12.0, "pitch": -20.0, "fov": 60.0},
-                       "layers": [{"kind": "noise", "mode": "surface", "density": 0.004, "scale": 70.0,
-                                   "height_falloff": True, "falloff_scale": 20.0, "wind": True}]},
+            "title": "Perlin fog, as an artist sets it up",
+            "source": "Perlin Fog (course project write-up): its baked fractal noise and quadratic height falloff",
+            "description": "The write-up's baked fractal Perlin noise, integrated through the "
+                           "volume (not painted on the ground as its surface mode does), drifting "
+                           "with the wind over a ground mist, and lit by the sun: patches of "
+                           "mist that shade one another. The write-up's own surface mode is a "
+                           "layer's mode away.",
+            "params": {"camera": {"position": (-30.0, 40.0, 120.0), "yaw": 12.0, "pitch": -12.0, "fov": 60.0},
+                       "sun": {"azimuth": 200.0, "elevation": 20.0},
+                       "fog_color": "#7c8896",
+                       "effects": lit(scatter=0.12),
+                       "layers": [{"kind": "height", "density": 0.02, "falloff": 0.15, "base": 2.0},
+                                  {"kind": "noise", "mode": "volume", "density": 0.012, "scale": 45.0,
+                                   "wind": True, "samples": 12}]},
         },
         "fog-volumes": {
             "title": "Fog volumes: a box and an ellipsoid",
             "source": "fogbank: closed-form chords through a box and an ellipsoid (the sphere's profile of Quilez)",
-            "description": "A rotated box of constant fog lying along the river at the bridge "
-                           "(tau = rho times the chord, slab method) and an ellipsoidal cloud over "
-                           "the forest (the sphere's 1 - r^2 profile in the ellipsoid's metric), "
-                           "over a thin ground haze.",
-            "params": {"camera": view,
+            "description": "A rotated box of fog lying along the river at the bridge, its faces "
+                           "faded (Godot's edge fade: exact, a cubic between the fade's kinks), "
+                           "and an ellipsoidal cloud over the forest (the sphere's 1 - r^2 "
+                           "profile in the ellipsoid's metric), over a thin ground haze, lit.",
+            "params": {"camera": view, "sun": {"azimuth": 230.0, "elevation": 25.0},
+                       "fog_color": "#7a8593",
+                       "effects": lit(scatter=0.15),
                        "layers": [
                            {"kind": "height", "density": 0.006, "falloff": 0.08, "base": 0.0},
                            {"kind": "box", "center": (bx, 3.0, bz - 25.0), "half_size": (14.0, 5.0, 45.0),
-                            "yaw": -12.0, "density": 0.07},
+                            "yaw": -12.0, "density": 0.07, "edge_fade": 0.8},
                            {"kind": "ellipsoid", "center": (fx, fy + 6.0, fz), "radii": (38.0, 9.0, 24.0),
                             "yaw": 30.0, "pitch": 6.0, "density": 0.16}]},
         },
         "carved-clearing": {
             "title": "A clearing carved out of the fog",
-            "source": "fogbank: a negative-density ellipsoid subtracted from height fog",
-            "description": "Dense valley fog with an ellipsoid of negative density around the "
-                           "house (Biri's subtracted objects, Godot's negative FogVolume): the "
-                           "fog is carved away there, and the total optical depth never drops "
-                           "below 0.",
-            "params": {"camera": house_view,
+            "source": "fogbank: an ellipsoid that carves the fog inside itself (Godot's negative FogVolume, Biri's subtracted objects)",
+            "description": "Dense valley fog with a clearing around the house: an ellipsoid "
+                           "that removes the fog inside itself, and only there, its edge faded "
+                           "in steps. The house stands clear inside standing fog, with the fog "
+                           "between it and the eye still in front of it.",
+            "params": {"camera": {"position": (-95.0, 24.0, 40.0), "yaw": 40.0, "pitch": -6.0, "fov": 55.0},
+                       "sun": {"azimuth": 150.0, "elevation": 25.0},
+                       "fog_color": "#7d8896",
+                       "effects": lit(scatter=0.1),
                        "layers": [
                            {"kind": "height", "density": 0.05, "falloff": 0.04, "base": 0.0},
                            {"kind": "ellipsoid", "center": (hx, hy, hz), "radii": (22.0, 14.0, 22.0),
@@ -172,16 +222,41 @@ def _presets() -> dict[str, dict[str, Any]]:
             "title": "Gawron & Boryczka 2018: distance fog",
             "source": "Gawron & Boryczka, Heterogeneous Fog Generated with the Effect of Light Scattering and Blur (2018): sections 3.1-3.3",
             "description": "Distance fog with noise-varied density, an orange scatter colour of "
-                           "its own in the sun's direction (eqs. 5-8, with the scatter start "
-                           "distance), its noise drifting on its own (not with the wind) and a "
-                           "Gaussian blur that grows with the fog.",
-            "params": {"camera": view, "fog_color": "#a9bcd9",
+                           "its own in the sun's direction (eqs. 5-8), its noise drifting on its own "
+                           "(not with the wind) and a Gaussian blur that grows with the fog; the "
+                           "sky in the fog at the horizon.",
+            "params": {"camera": view, "fog_color": "#96938c",
                        "sun": {"azimuth": 30.0, "elevation": 9.0, "color": "#fff1d6", "intensity": 3.0},
-                       "effects": {"scatter": 0.25, "scatter_exponent": 4.0, "scatter_color": "#ffa647",
-                                   "scatter_start": 20.0, "blur": "single", "blur_radius": 3.0},
+                       "effects": {"scatter": 0.6, "scatter_exponent": 4.0, "scatter_color": "#ffa033",
+                                   "blur": "single", "blur_radius": 3.0, "tone_map": "neutral",
+                                   "aerial_perspective": 0.35},
                        "layers": [{"kind": "distance", "start": 10.0, "distance": 260.0, "exponent": 0.55,
                                    "low": 0.8, "high": 1.2, "max": 0.75, "noise_scale": 90.0, "wind": False,
                                    "drift": (2.0, 0.0, -1.0)}]},
+        },
+        "forest-shafts": {
+            "title": "Shafts through the forest",
+            "source": "fogbank: single scattering in height fog, the trees' shadows from the shadow map",
+            "description": "Morning haze in the forest with the sun low behind the trees: each "
+                           "trunk and crown casts a shadow through the fog, and the sunlit fog "
+                           "between them glows forward (Henyey-Greenstein g = 0.75).",
+            "params": {"camera": {"position": (40.0, 27.0, 20.0), "yaw": 45.0, "pitch": -6.0, "fov": 60.0},
+                       "sun": {"azimuth": 45.0, "elevation": 12.0, "color": "#ffe2b8", "intensity": 3.0},
+                       "fog_color": "#55606d",
+                       "effects": lit(scatter=0.12, anisotropy=0.75, sky_distance=400.0),
+                       "layers": [{"kind": "height", "density": 0.03, "falloff": 0.12, "base": 5.0}]},
+        },
+        "shaded-valley": {
+            "title": "A shaded valley filled with fog",
+            "source": "fogbank: single scattering in height fog, the hills' shadow from the shadow map",
+            "description": "A low sun from the east over the ridge: the fog filling the river "
+                           "valley lies in the hill's shadow and is lit by the sky alone, darker "
+                           "than the fog on the sunny slopes above it.",
+            "params": {"camera": {"position": (-60.0, 32.0, 60.0), "yaw": 100.0, "pitch": -13.0, "fov": 60.0},
+                       "sun": {"azimuth": 75.0, "elevation": 7.0, "color": "#ffe0b0", "intensity": 3.2},
+                       "fog_color": "#56616f",
+                       "effects": lit(scatter=0.15, anisotropy=0.4, sky_distance=300.0),
+                       "layers": [{"kind": "height", "density": 0.04, "falloff": 0.2, "base": 3.0}]},
         },
     }
 
