@@ -60,7 +60,7 @@ KIND = Kind(
         "max": layer.max, "low": layer.low, "high": layer.high,
         "inv_noise_scale": 1.0 / layer.noise_scale,
         "offset": np.mod(p.slid(layer) / layer.noise_scale, 1.0)},   # E in tiles, mod 1
-    code=direct("distanceFogAmount(ds, noiseSample(uNoise, P, {inv_noise_scale}, {offset}), "
+    code=direct("distanceFogAmount(ds, noiseSample(uNoise, P, {inv_noise_scale}, {offset}, true), "
                 "{start}, {inv_distance}, {exponent}, {max}, {low}, {high})"),
     sample=sample, log_transmittance=log_transmittance, uses_noise=True, seconds_per_mpx=0.05,
 )

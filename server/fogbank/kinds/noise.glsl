@@ -4,7 +4,7 @@
 // height falloff n dY^2 / 2 + 0.001, dY = (O_y - P_y) / falloffScale (unitless).
 float noiseSurfaceOpticalDepth(sampler3D tex, vec3 O, vec3 P, float d, float rho,
                                float invScale, vec3 off, bool falloff, float invFalloffScale) {
-    float n = noiseSample(tex, P, invScale, off);
+    float n = noiseSample(tex, P, invScale, off, true);
     if (falloff) {
         float dy = (O.y - P.y) * invFalloffScale;
         n = n * dy * dy * 0.5 + 0.001;
@@ -38,7 +38,7 @@ float noiseVolumeOpticalDepth(sampler3D tex, vec3 O, vec3 w, float d, float rho,
     int n = noiseVolumeSamples(d, rho, float(textureSize(tex, 0).x), invScale, w, D, maxSamples, jitter);
     float acc = 0.0;
     for (int i = 0; i < n; ++i) {
-        acc += noiseSample(tex, O + w * (d * (float(i) + jitter) / float(n)), invScale, off);
+        acc += noiseSample(tex, O + w * (d * (float(i) + jitter) / float(n)), invScale, off, false);
     }
     return rho * acc * d / float(n);
 }

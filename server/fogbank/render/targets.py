@@ -21,7 +21,7 @@ OUT_BPP = 4                                   # RGBA8 output renderbuffer
 # and top row first, 3 bytes a pixel each (a still's RGB; a stream frame's RGBX takes 4)
 READBACK_BPP = 2 * 3
 MSAA_BPP = MSAA_SAMPLES * (8 + 4 + 4)         # RGBA16F + R32F + depth24/stencil8, per sample
-LINEAR_BPP = 2 * 8                            # two RGBA16F blur targets
+LINEAR_BPP = 2 * 8 * 4 // 3                   # two RGBA16F blur targets and their mip pyramids
 # near surface: RGBA16F colour, R32F inverse distance, depth; far surface (two-surface
 # resolve, passes/resolve.frag): RGBA16F colour and coverage, R32F inverse distance
 GBUFFER_BPP = 8 + 4 + 4 + 8 + 4
@@ -112,7 +112,7 @@ class Targets:
             n += w * h * (MSAA_BPP + (MSAA_SAMPLES * SUNLIGHT_BPP if sun else 0))
         for scale, _ in self.fog:
             n += -(-w // scale) * -(-h // scale) * FOG_BPP
-        n += len(self.linear) * w * h * 8
+        n += len(self.linear) * w * h * 8 * 4 // 3   # with their mip pyramids (passes/blur.py)
         n += sum(t.nbytes() for t in self.light.values())
         return n
 
@@ -161,7 +161,7 @@ class Targets:
         return self.light[tile, slices]
 
     def linear_pair(self):
-        """Two RGBA16F targets for the separate blur passes."""
+        """Two RGBA16F targets for the separate blur passes (mipmapped by the blur pass)."""
         while len(self.linear) < 2:
             tex = self.ctx.texture(self.size, 4, dtype="f2")
             tex.repeat_x = tex.repeat_y = False

@@ -27,6 +27,9 @@ class BlurPass(Pass):
         set_uniforms(prog, {"uBlurSigma": blur_sigma(f), "uBlurExponent": e.blur_exponent,
                             **output_uniforms(f.still)})
         for src, dst, direction, final in ((ta, fb, (1.0, 0.0), False), (tb, f.targets.out, (0.0, 1.0), True)):
+            # its taps read the mip level as wide as their gaps (passes/blur.frag)
+            src.build_mipmaps()
+            src.filter = (moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR)
             dst.use()
             src.use(TEX["uImage"])
             set_uniforms(prog, {"uDirection": direction, "uFinal": final})
