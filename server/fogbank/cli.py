@@ -83,9 +83,15 @@ def cmd_still(args) -> None:
     print(f"{args.out}: {still.width}x{still.height} on {r.info()['renderer']}")
 
 
+GALLERY_LATER_S = 8.0   # the gallery's second frame of each preset, this much later
+
+
 def cmd_gallery(args) -> None:
-    """Render every preset at --width x --height as JPEG, timing each (median of --repeat)."""
+    """Render every preset at --width x --height as JPEG at its time and GALLERY_LATER_S
+    later (NAME.jpg, NAME-later.jpg), timing each (median of --repeat), and a contact sheet
+    of them all (contact-sheet.jpg, each preset's two frames side by side, named)."""
     import numpy as np
+    from PIL import Image, ImageDraw
 
     from fogbank.render.encode import encode
     from fogbank.model.params import StillParams
@@ -96,7 +102,9 @@ def cmd_gallery(args) -> None:
     r = Renderer(create_context(s.gl_backend, s.gl_device, s.raster_threads))
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    rows = []
+    rows, sheet = [], []
+    thumb = args.thumb if args.thumb and args.thumb < args.width else args.width
+    size = (thumb, round(thumb * args.height / args.width))
     for name in presets():
         still = StillParams.model_validate({**preset_dict(name), "width": args.width, "height": args.height})
         r.render(still)  # warm: meshes, programs, targets
@@ -108,17 +116,26 @@ def cmd_gallery(args) -> None:
             t0 = time.perf_counter()
             r.render(cold)
             times.append(time.perf_counter() - t0)
-        img = r.render(still)
-        if args.thumb and args.thumb < args.width:   # small JPEGs for the README
-            from PIL import Image
-            th = Image.fromarray(img).resize((args.thumb, round(args.thumb * args.height / args.width)),
-                                             Image.LANCZOS)
-            img = np.asarray(th)
-        (out / f"{name}.jpg").write_bytes(encode(img, "jpg", quality=82))
+        pair = []
+        for suffix, t in (("", still.time), ("-later", still.time + GALLERY_LATER_S)):
+            img = Image.fromarray(r.render(still.model_copy(update={"time": t})))
+            if size != img.size:   # small JPEGs for the README
+                img = img.resize(size, Image.LANCZOS)
+            (out / f"{name}{suffix}.jpg").write_bytes(encode(np.asarray(img), "jpg", quality=82))
+            pair.append(img)
+        sheet.append((name, still.time, pair))
         med = sorted(times)[len(times) // 2]
         rows.append({"preset": name, "ms": round(med * 1000, 1)})
         print(f"{name:18s} {med * 1000:8.1f} ms  (median of {args.repeat}, {args.width}x{args.height}, "
               f"full frame incl. scene pass and readback)")
+    w, h = size[0] // 2, size[1] // 2
+    contact = Image.new("RGB", (4 * w, -(-len(sheet) // 2) * h), (0, 0, 0))
+    for k, (name, t, pair) in enumerate(sheet):
+        for j, img in enumerate(pair):
+            x, y = (2 * (k % 2) + j) * w, (k // 2) * h
+            contact.paste(img.resize((w, h), Image.LANCZOS), (x, y))
+            ImageDraw.Draw(contact).text((x + 4, y + 3), f"{name}  t = {t + j * GALLERY_LATER_S:g} s", fill=(255, 255, 0))
+    (out / "contact-sheet.jpg").write_bytes(encode(np.asarray(contact), "jpg", quality=85))
     print(json.dumps({"renderer": r.info()["renderer"], "results": rows}))
 
 
