@@ -71,19 +71,23 @@ class FogPlan:
                 if KINDS[k].quads]
 
 
-def plan_fog(fog, time: float, ref, sims: Simulations, split: bool = False, light: bool = False) -> FogPlan:
+def plan_fog(fog, time: float, ref, sims: Simulations, split: bool = False, light: bool = False,
+             whole=None) -> FogPlan:
     """The fog's plan at `time`, its layers packed relative to `ref`; with `split`, also the
     plans of its layers that do not change with time and of the others (FogPlan.split);
-    with `light` (a frame's, of a lit look), each particle's share of the sunlight."""
+    with `light` (a frame's, of a lit look), each particle's share of the sunlight, through
+    the `whole` look's fog (a split half's particles are lit through every layer, not
+    only their half's: the moving half's smoke was lit as if no static fog stood toward the sun)."""
     states = {i: sims.state(l, time, fog) for i, l in enabled(fog) if KINDS[l.kind].simulate}
     e = fog.effects
     n = fog.noise
-    halves = tuple(plan_fog(part, time, ref, sims, light=light) for part in split_by_time(fog)) if split else None
+    halves = tuple(plan_fog(part, time, ref, sims, light=light, whole=fog)
+                   for part in split_by_time(fog)) if split else None
     packed = pack_layers(fog, states, ref, time)
     return FogPlan(
         key=variant(fog),
         packed=packed,
-        particle_light=(particle_light(fog, packed, ref, time, fog.sun.direction(), e.sky_distance)
+        particle_light=(particle_light(whole or fog, packed, ref, time, fog.sun.direction(), e.sky_distance)
                         if light and e.lit and states else None),
         has_particles=bool(states),
         noise=(n.size, n.octaves, n.blur, n.seed) if uses_noise(fog) else None,
