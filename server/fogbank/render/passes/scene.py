@@ -40,6 +40,18 @@ def lod_levels(nearest: np.ndarray, error: np.ndarray, fov: float, height: int) 
     return level
 
 
+def merged_ranges(first: np.ndarray, count: np.ndarray) -> list[tuple[int, int]]:
+    """Index ranges (first, count), in order, with each range that starts where the one
+    before it ends joined to it."""
+    out: list[list[int]] = []
+    for a, n in zip(first.astype(int), count.astype(int)):
+        if out and out[-1][0] + out[-1][1] == a:
+            out[-1][1] += n
+        else:
+            out.append([a, n])
+    return [(a, n) for a, n in out]
+
+
 class ScenePass(Pass):
     name = "scene"
     reads = ("meshes", "shadow_map", "lightmap", "view")
@@ -59,7 +71,7 @@ class ScenePass(Pass):
         ctx = r.ctx
         ctx.enable(moderngl.DEPTH_TEST)
         ctx.disable(moderngl.CULL_FACE)
-        common = {"uViewProj": view.view_proj, "uSunViewProj": f.sun_view_proj, "uEye": view.eye,
+        common = {"uViewProj": view.view_proj, "uSunViewProj": f.sun_view_proj, "uEye": view.eye, "uFar": cam.FAR,
                   "uSunDir": look.sun.direction(), "uSunColor": sun_color(look),
                   "uShadowTexel": 1.0 / f.shadow.size, "uShadowBiasScale": f.shadow.bias_scale}
         f.shadow.tex.use(TEX["uShadow"])
@@ -88,9 +100,14 @@ class ScenePass(Pass):
                         mesh.terrain.render(moderngl.TRIANGLES, vertices=int(count), first=int(first))
                 else:
                     mesh.terrain.render(moderngl.TRIANGLES, vertices=int(row[5 + 2 * lv]), first=int(row[4 + 2 * lv]))
-            first, count = mesh.far
-            if count:
-                mesh.terrain.render(moderngl.TRIANGLES, vertices=int(count), first=int(first))
+            if mesh.far_blocks is not None and len(mesh.far_blocks):
+                # the far land's blocks in view, consecutive ones as one draw
+                blocks = mesh.far_blocks
+                seen = cam.spheres_in_view(view.view_proj, blocks[:, 2:5], blocks[:, 5])
+                for first, count in merged_ranges(blocks[seen, 0], blocks[seen, 1]):
+                    mesh.terrain.render(moderngl.TRIANGLES, vertices=count, first=first)
+            elif mesh.far[1]:
+                mesh.terrain.render(moderngl.TRIANGLES, vertices=int(mesh.far[1]), first=int(mesh.far[0]))
             first, count = mesh.far_skirt
             if count and skirts:
                 mesh.terrain.render(moderngl.TRIANGLES, vertices=int(count), first=int(first))

@@ -24,8 +24,14 @@ layout(location = 0) out vec4 fColor;
 layout(location = 1) out float fInvDist;
 layout(location = 2) out vec4 fSunLight;
 
+uniform float uFar;   // m: the far plane (scene/camera.py FAR)
+
 void main() {
-    float dist = length(vPos - uEye);
+    // min(uFar): a partly covered pixel is shaded at its centre, which may lie off the
+    // triangle; a triangle that runs to the horizon extrapolates there to a point beyond
+    // anything drawn (1.6e6 m in a horizon row), whose fog float32 then integrates badly.
+    // Nothing drawn lies beyond the far plane.
+    float dist = min(length(vPos - uEye), uFar);
     fInvDist = 1.0 / max(dist, 1e-4);  // 1e-4 m: a fragment at the eye is not "sky"
 #if !TERRAIN
     if (vMaterial == 3) { fColor = vec4(vColor, 1.0); fSunLight = vec4(0.0); return; }
