@@ -15,6 +15,8 @@ from fogbank.model.params import StillParams
 from fogbank.model.presets import preset_dict
 from fogbank.render.passes import FRAME_PASSES
 from fogbank.scene import terrain
+from fogbank.scene.bounds import CAMERA_BOUNDS
+from fogbank.scene.meshes import SKIRT_NEAR
 
 W, H = 320, 180
 
@@ -134,3 +136,42 @@ def test_an_eye_below_the_ground_sees_the_terrains_underside_and_no_skirt(render
     assert int(steady.sum()) > 0.2 * W * H
     assert int((drawn[steady] < 0.9 * true[steady] - 1.0).sum()) == 0
     assert float(np.median(np.abs(drawn[steady] / true[steady] - 1.0))) < 0.01
+
+
+def _bounds_edges():
+    """The countryside's camera bounds: its four corners and the middles of its four sides."""
+    lo, hi = CAMERA_BOUNDS["countryside"]
+    return [(x, z) for x in (lo[0], 0.0, hi[0]) for z in (lo[2], 0.0, hi[2]) if (x, z) != (0.0, 0.0)]
+
+
+@pytest.mark.parametrize("height", ["low", "high"])
+def test_from_the_bounds_edges_the_land_is_the_height_field_to_the_horizon(renderer, height):
+    """Issue 32's world edge: from every corner and side of the camera's bounds (660 m out),
+    3 m above the ground or at the bounds' top (800 m), in 8 directions, every pixel 1
+    degree or more below the horizon meets land (no void), and the land seen beyond the
+    detailed square, out to SKIRT_NEAR, lies on the height field: the far land's 190 m
+    facets there rose up to 26 m above it, a dark ceiling over an eye 3 m above the ground
+    (99th percentile of |y - height| less half a pixel's footprint, per view, 8-25 m; now
+    within 1.5 m: 22 m cells)."""
+    worst_p99, worst_share = 0.0, 0.0
+    for x, z in _bounds_edges():
+        y = float(terrain.height(x, z)) + 3.0 if height == "low" else CAMERA_BOUNDS["countryside"][1][1]
+        for yaw in range(0, 360, 45):
+            s = _look((x, y, z), float(yaw), -4.0 if height == "low" else -20.0)
+            drawn, rays = _distances(renderer, s), _rays(s.camera)
+            below = np.degrees(np.arcsin(rays[..., 1])) <= -1.0
+            assert int((~np.isfinite(drawn[below])).sum()) == 0
+            keep = _steady(drawn)   # off the silhouettes, where a pixel mixes near and far
+            P = np.array([x, y, z]) + rays[keep] * drawn[keep][:, None]
+            ground = terrain.height(P[:, 0], P[:, 2])
+            out = np.maximum(np.abs(P[:, 0]), np.abs(P[:, 2]))
+            band = (out > terrain.EXTENT + 1.0) & (out < SKIRT_NEAR) & (ground > terrain.WATER_LEVEL + 0.5)
+            if band.sum() < 100:
+                continue
+            # less what a pixel's footprint (half of it) may move a sloped surface's point
+            footprint = drawn[keep][band] * 2.0 * math.tan(math.radians(s.camera.fov) / 2) / H
+            off = np.abs(P[band, 1] - ground[band]) - 0.5 * footprint
+            worst_p99 = max(worst_p99, float(np.percentile(off, 99)))
+            worst_share = max(worst_share, float((off > 2.0).mean()))
+    assert worst_p99 <= 1.5
+    assert worst_share <= 0.005

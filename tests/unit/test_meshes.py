@@ -14,7 +14,7 @@ def test_the_far_skirt_meets_the_detailed_terrain_without_crack_or_overlap():
     and height: no crack at the seam), no skirt vertex lies inside the detailed square (no
     coarse facet above the fine terrain there), and the skirt reaches SKIRT_OUTER."""
     E = terrain.EXTENT
-    skirt = meshes._far_skirt()[:, :3].astype(np.float64)
+    skirt = meshes._far_skirt()[0][:, :3].astype(np.float64)
     grid = meshes._terrain_grid()[0][:, :3].astype(np.float64)
     edge = grid[(np.abs(np.abs(grid[:, 0]) - E) < 1e-3) | (np.abs(np.abs(grid[:, 2]) - E) < 1e-3)]
     shared = {tuple(v) for v in np.round(skirt, 3)}
@@ -33,13 +33,32 @@ def test_the_far_skirt_and_the_terrain_tile_the_plane_exactly():
     def areas(p):
         a, b, c = p[0::3], p[1::3], p[2::3]
         return 0.5 * np.abs((b[:, 0] - a[:, 0]) * (c[:, 2] - a[:, 2]) - (c[:, 0] - a[:, 0]) * (b[:, 2] - a[:, 2]))
-    skirt = meshes._far_skirt()[:, :3].astype(np.float64)
+    skirt = meshes._far_skirt()[0][:, :3].astype(np.float64)
     verts, idx, _ = meshes._terrain_grid()
     grid = verts[idx, :3].astype(np.float64)
     sa, ga = areas(skirt), areas(grid)
     assert float(sa.min()) > 0.0
     assert float(ga.sum()) == pytest.approx((2 * terrain.EXTENT) ** 2, rel=1e-6)
     assert float(sa.sum() + ga.sum()) == pytest.approx((2 * meshes.SKIRT_OUTER) ** 2, rel=1e-6)
+
+
+def test_the_far_lands_blocks_are_its_triangles_in_ranges_each_within_its_sphere():
+    """The scene pass culls the far land by blocks: their ranges follow each other and
+    cover its triangles once, and each block's sphere holds every one of its vertices (a
+    vertex outside would be culled while in view). Within SKIRT_NEAR the grid is
+    SKIRT_STEP apart: the land round any allowed eye follows the height field."""
+    verts, blocks = meshes._far_skirt()
+    first, count = blocks[:, 0].astype(int), blocks[:, 1].astype(int)
+    assert first[0] == 0 and int(count.sum()) == len(verts)
+    assert np.array_equal(first[1:], first[:-1] + count[:-1])
+    assert int((count % 3).max()) == 0
+    for a, n, cx, cy, cz, radius in blocks:
+        p = verts[int(a):int(a + n), :3].astype(np.float64)
+        assert float(np.linalg.norm(p - [cx, cy, cz], axis=1).max()) <= radius * (1 + 1e-6) + 1e-3
+    xs = meshes.skirt_coordinates()
+    near = xs[np.abs(xs) <= meshes.SKIRT_NEAR + 1e-6]
+    assert float(np.diff(near).max()) <= meshes.SKIRT_STEP * 1.06   # the kept grid lines: 14 or 15 of 287
+    assert float(near.max()) >= 3.0 * terrain.EXTENT
 
 
 def _signed_areas(verts: np.ndarray, tri: np.ndarray) -> np.ndarray:

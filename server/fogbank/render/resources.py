@@ -60,6 +60,7 @@ class SceneMesh:
     # its lightmap's terrain (vao, vertices)
     draft_shadow: list[tuple[moderngl.VertexArray, int]] | None = None
     draft_bake: tuple[moderngl.VertexArray, int] | None = None
+    far_blocks: np.ndarray | None = None       # the far land's blocks: first index, count, centre, radius
 
     def casters(self, draft: bool) -> tuple[list[tuple[moderngl.VertexArray, int]], tuple | None]:
         """What the full shadow map (or, `draft`, the preview one) is drawn from: its
@@ -105,7 +106,7 @@ class Meshes:
             self._meshes[name] = SceneMesh(terrain, bake, objects, shadow, m.bounds, m.terrain_chunks,
                                            m.terrain_far, m.full_detail, m.terrain_lod_error,
                                            m.terrain_skirt0, m.terrain_skirts, m.objects_full, m.object_groups,
-                                           m.terrain_far_skirt, draft, draft_bake)
+                                           m.terrain_far_skirt, draft, draft_bake, m.terrain_far_blocks)
         return self._meshes[name]
 
 

@@ -43,6 +43,8 @@ class Mesh:
     objects_full: int = -1         # the objects' corners at full detail, from the first (-1: all)
     object_groups: np.ndarray | None = None   # (G, 9): the trees by chunk (_objects)
     terrain_far_skirt: tuple[int, int] = (0, 0)   # first index and count of the far land's inner skirt
+    terrain_far_blocks: np.ndarray | None = None   # (B, 6): the far land in blocks (_far_skirt),
+                                   # first index, count, centre x, y, z, radius (m)
 
     @property
     def full_detail(self) -> int:
@@ -484,13 +486,18 @@ def _objects() -> tuple[np.ndarray, int, np.ndarray]:
 
 
 # The land beyond the detailed terrain, out to the horizon: the same height field on a
-# coarse grid whose rings grow by SKIRT_GROWTH from the detailed grid's edge out to
-# SKIRT_OUTER (within the camera's far plane). The cells along the edge are fans onto the
-# detailed grid's own edge vertices, so the two meshes share every seam vertex: no crack,
-# and no overlap for a coarse facet to poke through.
+# grid: cells of SKIRT_STEP metres out to SKIRT_NEAR (beyond the camera's bounds, so the
+# land under and round any allowed eye is within about 0.3 m of the height field: with
+# 190 m cells the far land's facets rose up to 20 m above it, over an eye 3 m above the
+# ground at the bounds' edge), then cells growing by SKIRT_GROWTH out to SKIRT_OUTER
+# (within the camera's far plane). The cells along the edge are fans onto the detailed
+# grid's own edge vertices, so the two meshes share every seam vertex: no crack, and no
+# overlap for a coarse facet to poke through.
 SKIRT_OUTER = 120000.0
 SKIRT_GROWTH = 1.3
-SKIRT_INNER_CELLS = 7   # coarse cells along each side of the detailed square
+SKIRT_INNER_CELLS = 20   # coarse cells along each side of the detailed square (22 m)
+SKIRT_STEP = 2 * terrain.EXTENT / SKIRT_INNER_CELLS
+SKIRT_NEAR = 3.0 * terrain.EXTENT + 2 * SKIRT_STEP   # scene/bounds.py: the eye stays within 3 EXTENT
 
 
 def _edge_lines() -> np.ndarray:
@@ -502,19 +509,25 @@ def _edge_lines() -> np.ndarray:
 
 def skirt_coordinates() -> np.ndarray:
     """The skirt's coarse grid lines along x (and z): some of the detailed grid's lines,
-    then rings growing outward from its edge."""
-    E = terrain.EXTENT
-    ring = [E]
+    then rings SKIRT_STEP apart to SKIRT_NEAR, then rings whose gaps grow outward."""
+    ring, step = [terrain.EXTENT], SKIRT_STEP
     while ring[-1] < SKIRT_OUTER:
-        ring.append(min(ring[-1] * SKIRT_GROWTH, SKIRT_OUTER))
+        if ring[-1] >= SKIRT_NEAR - 1e-6:
+            step *= SKIRT_GROWTH
+        ring.append(min(float(np.round(ring[-1] + step)), SKIRT_OUTER))   # whole metres: exact in float32
     fine, keep = _edge_lines()
     return np.concatenate([-np.array(ring[:0:-1]), fine[keep], np.array(ring[1:])])
 
 
-def _far_skirt() -> np.ndarray:
+FAR_BLOCK = 4   # the far land's cells per side of a block, culled by the view as one
+
+
+def _far_skirt() -> tuple[np.ndarray, np.ndarray]:
     """The far land as terrain-material triangles, at the terrain's own height: every cell
     of the coarse grid outside the detailed square; a cell with a side on the square's
-    edge is a fan from its outer corner onto the detailed grid's vertices along that side."""
+    edge is a fan from its outer corner onto the detailed grid's vertices along that side.
+    The cells come in blocks of FAR_BLOCK x FAR_BLOCK, each a range the scene pass culls by
+    the view: (N, 10) vertices, and per block (first vertex, count, centre x, y, z, radius)."""
     E = terrain.EXTENT
     fine, _ = _edge_lines()
     xs = skirt_coordinates()
@@ -523,12 +536,13 @@ def _far_skirt() -> np.ndarray:
     def vertex(x, z):
         return (x, float(terrain.height(x, z)), z)
 
-    tris = []
+    blocks: dict[tuple[int, int], list] = {}
     for j in range(n - 1):
         for i in range(n - 1):
             x0, x1, z0, z1 = xs[i], xs[i + 1], xs[j], xs[j + 1]
             if max(abs(x0), abs(x1)) <= E and max(abs(z0), abs(z1)) <= E:
                 continue   # inside the detailed terrain
+            tris = blocks.setdefault((j // FAR_BLOCK, i // FAR_BLOCK), [])
             a, b, c, d = vertex(x0, z0), vertex(x1, z0), vertex(x0, z1), vertex(x1, z1)
             on_edge = None
             if max(abs(z0), abs(z1)) <= E and (x1 == -E or x0 == E):      # left or right of it
@@ -548,14 +562,21 @@ def _far_skirt() -> np.ndarray:
             for k in range(len(edge) - 1):              # the fan from the far side's first corner
                 tris += [f0, edge[k], edge[k + 1]]
             tris += [f0, edge[-1], f1]
-    pos = np.array(tris, dtype=np.float64).reshape(-1, 3, 3)
+    parts, table, at = [], [], 0
+    for key in sorted(blocks):
+        pos = np.array(blocks[key], dtype=np.float64)
+        lo, hi = pos.min(axis=0), pos.max(axis=0)
+        table.append((at, len(pos), *((lo + hi) / 2), float(np.linalg.norm(hi - lo) / 2)))
+        parts.append(pos)
+        at += len(pos)
+    pos = np.concatenate(parts).reshape(-1, 3, 3)
     # wound as the grid's triangles, facing up: the fans on two of the square's sides came
     # out the other way, and the scene program shades a back face by its reversed normal
     # (a dark band of ground shaded from below along the detailed land's edge)
     up = np.cross(pos[:, 1] - pos[:, 0], pos[:, 2] - pos[:, 0])[:, 1] < 0
     pos[up, 1], pos[up, 2] = pos[up, 2].copy(), pos[up, 1].copy()
     pos = pos.reshape(-1, 3)
-    return _tris(pos, terrain.normal(pos[:, 0], pos[:, 2]), (1.0, 1.0, 1.0), 1.0)
+    return _tris(pos, terrain.normal(pos[:, 0], pos[:, 2]), (1.0, 1.0, 1.0), 1.0), np.array(table)
 
 
 @lru_cache(maxsize=2)
@@ -565,8 +586,9 @@ def build(name: str) -> Mesh:
     tv, ti, tc = _terrain_grid()
     # the far land is terrain too (drawn by the terrain's program, baked in its lightmap):
     # its triangles follow the grid's in the vertex and index buffers
-    skirt = _far_skirt()
+    skirt, far_blocks = _far_skirt()
     far = (len(ti), len(skirt))
+    far_blocks[:, 0] += len(ti)
     ti = np.concatenate([ti, np.arange(len(tv), len(tv) + len(skirt), dtype=np.uint32)])
     tv = np.concatenate([tv, skirt])
     lod, table, skirt0, skirt_counts, err, lowered = _terrain_lods(tv, TERRAIN_CELLS, len(ti))
@@ -586,7 +608,7 @@ def build(name: str) -> Mesh:
     E = terrain.EXTENT
     objects, objects_full, groups = _objects()
     return Mesh(tv, ti, tc, objects, (np.array([0.0, 5.0, 0.0]), E * 1.05), far, err, skirt0, skirt_counts,
-                objects_full, groups, far_skirt)
+                objects_full, groups, far_skirt, far_blocks)
 
 
 # The calibration scene: unlit, so a pixel's scene colour equals its albedo exactly.
