@@ -130,16 +130,30 @@ def test_liveness_fails_while_no_worker_answers_and_recovers():
     run(body, Settings(liveness_s=1.5, probe_interval_s=0.2, probe_deadline_s=60))
 
 
+# a new worker's allowance to start: its warm-up (meshes, programs) takes about 7 s here
+START_S = 15.0
+
+
 def test_a_stuck_worker_is_replaced_when_its_probes_never_start():
+    """A worker past its allowance to start that starts no job (stopped) is replaced, and
+    its replacement, warming up, is given its own allowance, not replaced in turn (with 1 s,
+    a warm-up of 7 s was taken for stuck again and again: the pool broke under the call)."""
     async def body(sup: Supervisor):
         slot = sup.interactive.slots[0]
+        await sup.call(slot, worker.probe, deadline=30, queue_s=60)   # up and warm
         old = slot.pid
+        await asyncio.sleep(max(0.0, slot.started + START_S - time.monotonic()))
         os.kill(old, signal.SIGSTOP)
-        await asyncio.sleep(5.0)       # nothing starts for 1.5 s: the stuck worker is replaced
-        out = await sup.call(slot, worker.probe, deadline=30)
+        await asyncio.sleep(4.0)       # nothing starts for 1.5 s: the stuck worker is replaced
+        out = await sup.call(slot, worker.probe, deadline=30, queue_s=START_S)
         assert out["pid"] != old
         assert sup.live()[0] is True
-    run(body, Settings(probe_interval_s=0.2, probe_deadline_s=0.5, liveness_s=1.0, worker_start_s=1.0))
+        for _ in range(100):           # and the stopped one is killed, not left behind
+            if not alive(old):
+                break
+            await asyncio.sleep(0.1)
+        assert alive(old) is False
+    run(body, Settings(probe_interval_s=0.2, probe_deadline_s=0.5, liveness_s=1.0, worker_start_s=START_S))
 
 
 def test_a_stream_frame_says_whether_the_worker_held_its_scene_pass():

@@ -533,8 +533,8 @@ def _far_skirt() -> tuple[np.ndarray, np.ndarray]:
     xs = skirt_coordinates()
     n = len(xs)
 
-    def vertex(x, z):
-        return (x, float(terrain.height(x, z)), z)
+    def vertex(x, z):   # its height is filled in below, for all vertices at once
+        return (x, 0.0, z)
 
     blocks: dict[tuple[int, int], list] = {}
     for j in range(n - 1):
@@ -565,6 +565,7 @@ def _far_skirt() -> tuple[np.ndarray, np.ndarray]:
     parts, table, at = [], [], 0
     for key in sorted(blocks):
         pos = np.array(blocks[key], dtype=np.float64)
+        pos[:, 1] = terrain.height(pos[:, 0], pos[:, 2])
         lo, hi = pos.min(axis=0), pos.max(axis=0)
         table.append((at, len(pos), *((lo + hi) / 2), float(np.linalg.norm(hi - lo) / 2)))
         parts.append(pos)
