@@ -156,7 +156,7 @@ def cmd_bench_stream(args) -> None:
 def cmd_bench(args) -> None:
     from fogbank.tools.bench import run
     run(args.out, quick=args.quick, only_targets=args.targets_only, before=args.before,
-        before_tree=args.before_tree)
+        before_tree=args.before_tree, only_lit=args.lit_only)
 
 
 def cmd_soak(args) -> None:
@@ -202,6 +202,9 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--before", help="a bench.json of another version: its targets become the 'before' column")
     p.add_argument("--before-tree", help="another checkout's server/ folder: its server is run in turn with this "
                    "one's in each round of the delivered frame rates (the 'before' column for them)")
+    p.add_argument("--lit-only", action="store_true",
+                   help="the still camera's 720p frame by light (lit, its grid lowered, unlit; with --before-tree "
+                   "the earlier code's too, in turn); writes bench-lit.json")
     p.set_defaults(fn=cmd_bench)
     p = sub.add_parser("soak", help="N streaming clients for a while; memory, frames, errors")
     p.add_argument("--clients", type=int, default=8)

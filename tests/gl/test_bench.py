@@ -65,6 +65,21 @@ def test_process_boundary_is_measured_through_real_workers():
     assert "## 7. The process boundary" in markdown(res)
 
 
+def test_the_lit_cost_runs_each_light_in_a_fresh_process_and_sees_the_grid(renderer):
+    """lit_cost's probe: a still camera's 720p frame in a fresh process of the given
+    tree's code, with the look's light changed. The light grid's pass costs time when the
+    look is lit and nothing when it is not (the frame then has no grid). In this process
+    the session's renderer draws: a second GL context made current here would leave the
+    session's objects to be drawn in it (a segfault in a later test)."""
+    from pathlib import Path
+    from fogbank.tools.bench import _probe, where_the_time_goes
+    assert _probe(str(Path(__file__).parents[2] / "server"), 1, {"light_quality": "low"}) > 0.0
+    lit = where_the_time_goes(renderer, 320, 180, n=2, orbit=False)
+    flat = where_the_time_goes(renderer, 320, 180, n=2, orbit=False, effects={"lit": False, "shafts": 0.0})
+    renderer.drop_slot("bench-still")
+    assert lit["light"] > 10 * flat["light"]
+
+
 def figures(fps720, lat, ratio):
     """What targets() returns, with the figures the tests vary."""
     return {"drag_1280x720": {"fps": fps720, "width": 640, "render_ms": 40},

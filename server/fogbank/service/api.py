@@ -115,7 +115,9 @@ class LightResponse(BaseModel):
                                       "-dT/ds T_sun V over the ray")
     medium_transmittance: list[float] = Field(description="the fog's own T along the ray, without the cutoff "
                                               "distance or max opacity: the T that J is integrated with")
-    light: list[tuple[float, float, float]] = Field(
+    # an RGB triple as a 3-long list, not a tuple: a tuple's prefixItems inside a response's
+    # `items` is read as the OpenAPI 3.0 list form by schemathesis' response checks
+    light: list[Annotated[list[float], Field(min_length=3, max_length=3)]] = Field(
         description="the fog's light along the ray, linear RGB, as the composite adds it to T times the "
                     "surface: (1 - T) fog_color + sun colour x intensity x scatter_color x scatter x phase x J "
                     "(phase: the look's lobe at the angle between the ray and the sun)")
@@ -388,7 +390,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
                          deadline=settings.render_timeout_s)
         return {"transmittance": [float(x) for x in out["T"]], "in_scattered": [float(x) for x in out["J"]],
                 "medium_transmittance": [float(x) for x in out["T_medium"]],
-                "light": [tuple(float(v) for v in row) for row in out["light"]],
+                "light": [[float(v) for v in row] for row in out["light"]],
                 "renderer": state["workers"].info.get("renderer", "")}
 
     suggest_lock = asyncio.Lock()

@@ -12,6 +12,7 @@ import json
 import os
 import platform
 import statistics
+import subprocess
 import sys
 import time
 import urllib.request
@@ -273,7 +274,8 @@ def orbit_frames(r: Renderer, w: int, h: int, msaa: bool, n: int = 9) -> float:
     return _median(frame, n)
 
 
-def where_the_time_goes(r: Renderer, w: int = 1280, h: int = 720, n: int = 7, orbit: bool = True) -> dict:
+def where_the_time_goes(r: Renderer, w: int = 1280, h: int = 720, n: int = 7, orbit: bool = True,
+                        effects: dict | None = None) -> dict:
     """The orbiting frame without MSAA (or, `orbit` False, a stream's frame with the camera
     still and time running: MSAA, the scene pass and the fog that does not move held), pass
     by pass (the GL finished after each), plus read back and JPEG: median ms each. The fog
@@ -282,6 +284,8 @@ def where_the_time_goes(r: Renderer, w: int = 1280, h: int = 720, n: int = 7, or
     frame it runs while the GL thread draws the shadow, sky and scene passes."""
     from fogbank.render.passes import FRAME_PASSES
     still = _still("default", w, h)
+    if effects:
+        still = still.model_copy(update={"effects": still.effects.model_copy(update=effects)})
     times: dict[str, list[float]] = {}
     skip = 1 if orbit else 3   # a still camera's third frame draws the held fog, the fourth reuses it
     for i in range(n + skip):
@@ -307,6 +311,49 @@ def where_the_time_goes(r: Renderer, w: int = 1280, h: int = 720, n: int = 7, or
         times.setdefault("JPEG q80", []).append((time.perf_counter() - t0) * 1000)
         r.keep_only(f)
     return {k: statistics.median(v[skip:]) for k, v in times.items()}
+
+
+# The still camera's 720p frame of the default look as a stream draws it, by light: the
+# look as it is (lit, "medium" grid), its grid lowered, and unlit (the papers' fog)
+LIT_VARIANTS = (("lit, medium grid", {}), ("lit, low grid", {"light_quality": "low"}),
+                ("unlit", {"lit": False, "shafts": 0.0}))
+_LIT_PROBE = ("import json, sys; from fogbank.render.renderer import Renderer, create_context; "
+              "from fogbank.tools.bench import where_the_time_goes as w; r = Renderer(create_context()); "
+              "print(json.dumps(w(r, orbit=False, n=int(sys.argv[1]){extra})))")
+
+
+def _probe(tree: str | None, n: int, effects: dict | None = None) -> float:
+    """A still camera's 720p frame (ms, passes + JPEG, median of n) in a fresh process, of
+    this code or of another checkout's `server` folder (`tree`, whose where_the_time_goes
+    takes no effects)."""
+    extra = f", effects=json.loads({json.dumps(json.dumps(effects))})" if effects else ""
+    env = {**os.environ, **(_tree_env(tree) if tree else {})}
+    out = subprocess.run([sys.executable, "-c", _LIT_PROBE.format(extra=extra), str(n)], env=env,
+                         capture_output=True, text=True, timeout=900, check=True).stdout
+    return sum(json.loads(out.strip().splitlines()[-1]).values())
+
+
+def lit_cost(before_tree: str | None, rounds: int = 3, n: int = 7) -> dict:
+    """Issue 32's speed figure: the still camera's 720p frame of the default look, whole
+    (every pass, read back, JPEG), for each LIT_VARIANTS and, with `before_tree`, for the
+    earlier code's default look; each a fresh process, all of them in turn in each round
+    (the order turned every round), median of `rounds` rounds. Ratios to the earlier
+    frame are taken within this run."""
+    runs: dict[str, list[float]] = {}
+    jobs = [(label, None, eff) for label, eff in LIT_VARIANTS]
+    if before_tree:
+        jobs.append(("before", before_tree, None))
+    for i in range(rounds):
+        for label, tree, eff in (jobs if i % 2 == 0 else jobs[::-1]):
+            ms = _probe(tree, n, eff)
+            runs.setdefault(label, []).append(ms)
+            print(f"  round {i + 1} {label:18s} {ms:7.1f} ms")
+    out = {label: {"ms": statistics.median(v), "rounds": v} for label, v in runs.items()}
+    if before_tree:
+        out["before"]["tree"] = before_tree
+        for label, _ in LIT_VARIANTS:
+            out[label]["vs_before"] = out[label]["ms"] / out["before"]["ms"]
+    return out
 
 
 def workers_scaling(seconds: float, clients: int = 4) -> list[dict]:
@@ -396,6 +443,8 @@ def targets(r: Renderer, seconds: float, analytic: list[dict], rounds: int = 3,
     print("    720p no MSAA by pass: " + ", ".join(f"{k} {v:.1f}" for k, v in out["where_720p"].items()))
     out["where_720p_still"] = where_the_time_goes(r, orbit=False)
     print("    720p still camera by pass: " + ", ".join(f"{k} {v:.1f}" for k, v in out["where_720p_still"].items()))
+    print("  the still camera's 720p frame by light (issue 32), each in a fresh process, in turn")
+    out["lit_cost"] = lit_cost(before_tree, rounds=rounds)
     version = bench_vtk.available()
     if version:
         vt = [bench_vtk.orbit(w, h) for w, h in ((1280, 720), (640, 360))]
@@ -578,7 +627,16 @@ def process_boundary(n: int = 300) -> dict:
 
 
 def run(out_dir: str = "docs", quick: bool = False, only_targets: bool = False,
-        before: str | None = None, before_tree: str | None = None) -> dict:
+        before: str | None = None, before_tree: str | None = None, only_lit: bool = False) -> dict:
+    if only_lit:   # issue 32's figure alone: the lit frame's cost, before and after in one run
+        res = {"command": " ".join(["fogbank"] + sys.argv[1:]), "cpu": _cpu(),
+               "date": time.strftime("%Y-%m-%d %H:%M:%S %Z"),
+               "lit_cost": lit_cost(before_tree, rounds=1 if quick else 3)}
+        print(json.dumps(res["lit_cost"]))
+        Path(out_dir).mkdir(parents=True, exist_ok=True)
+        Path(out_dir, "bench-lit.json").write_text(json.dumps(res, indent=1))
+        print(f"wrote {out_dir}/bench-lit.json")
+        return res
     earlier = json.loads(Path(before).read_text()) if before else None   # read first: fail fast
     r = Renderer(create_context())
     info = r.info()
