@@ -38,14 +38,16 @@ def shown_version(page) -> int:
 
 
 def wait_full_frame_of_current_version(page, timeout=60000, newer_than: int | None = None):
-    """Until a full-quality frame shows the look the server last confirmed, and, with
+    """Until a full-quality frame (not reduced: the refinement climbs to it, also paused)
+    shows the look the server last confirmed, and, with
     `newer_than` (shown_version before a change), one newer than that: right after an
     input the server may not have confirmed it yet, and the full frame shown then is the
     old look's, about to give way to a preview (the same size only by chance)."""
     newer = f" && Number(c.dataset.version) > {int(newer_than)}" if newer_than is not None else ""
     page.wait_for_function(
         "(() => { const c = document.getElementById('view');"
-        " return c.dataset.full === 'true' && Number(c.dataset.version) >= window.fogbank.version"
+        " return c.dataset.full === 'true' && c.dataset.reduced !== 'true'"
+        " && Number(c.dataset.version) >= window.fogbank.version"
         + newer + "; })()",
         timeout=timeout)
     time.sleep(0.3)   # let the canvas draw finish

@@ -503,6 +503,34 @@ def test_a_refinement_climbs_to_a_level_not_measured_only_from_a_level_that_was(
     assert s.start_frame(5.0).level == 0
 
 
+def test_a_paused_look_climbs_to_its_full_frame_without_input():
+    """Found by the browser tests after lit fog: a drag's first preview started on the last
+    rung (its estimate far over the preview budget) and forgot what was measured, so the
+    refinement after it could only climb a level a frame from that rung; paused, no frame
+    followed the first, and the page kept a frame a quarter of the view's side until the
+    next input. A refinement passed over for a level not yet measured is owed: the session
+    wants frames, a level sharper each, until the full look (which fits), then none."""
+    s = Session("a", now=0.0)
+    s.apply(msg('{"type": "play", "playing": false}'), 0.0)
+    s.apply(msg('{"type": "view", "width": 740, "height": 604}'), 0.0)
+    last = 2 + 6
+    s.refine_level, s.cost_ratio, s.calibrated = last, 1.0, True
+    s.level_ratios = {last: (1.0, 1.0)}
+    s.dirty, s.last_full = False, False
+    levels, t = [], 1.0
+    while s.wants_frame(t) and len(levels) < 20:
+        assert s.next_due(t) is not None
+        job = s.start_frame(t)
+        assert not s.wants_frame(t)   # the next climb waits for this frame's measurement
+        levels.append(job.level)
+        s.frame_done(job, sent=True)
+        s.apply(msg('{"type": "ack", "frame": %d}' % job.frame), t)
+        s.measured(job, job.estimate_ms, t)   # as estimated: every level fits 2 s
+        t += 0.1
+    assert levels == list(range(last - 1, -1, -1))
+    assert s.next_due(t) is None   # the full look shown: nothing more until something changes
+
+
 def test_a_new_sessions_previews_measure_the_levels_of_its_refinement():
     """A new session previews a costly look (its rungs are levels 2..8 of the refinement),
     and its first refinement is at most one level sharper than the sharpest measured."""

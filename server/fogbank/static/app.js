@@ -327,6 +327,7 @@ function showFrame(s) {
   canvas.dataset.frame = String(f.frame);
   canvas.dataset.version = String(f.version);
   canvas.dataset.full = String(f.full);
+  canvas.dataset.reduced = String(f.reduced);
   canvas.dataset.frames = String(s.frames);
 }
 

@@ -176,6 +176,11 @@ class Session:
         self.cost_ratio = 1.0     # measured / estimated render time of this session's frames
         self.calibrated = False   # cost_ratio is measured, not the prior 1.0
         self.refine_level = 0     # the refinement's last quality (Session._refinement)
+        # a sharper refinement is owed: the last full frame's level was below the best the
+        # calibrated estimates fit only because that level was not measured yet (it is
+        # climbed a level a frame); owed once that frame is measured (`_climb`: when drawn)
+        self.refine_owed = False
+        self._climb = False
         # measured / estimated of the full frames at each refinement level, smoothed: the cost
         # model's error differs by size (a look's fixed costs against its pixels)
         self.level_ratios: dict[int, tuple[float, float]] = {}   # level -> (ratio, when)
@@ -318,7 +323,8 @@ class Session:
         (never while the look whose frame was stopped at its deadline is unchanged)."""
         if self.stalled == self.version:
             return False
-        return self.playing or self.dirty or (not self.last_full and not self.previewing(now))
+        return (self.playing or self.dirty
+                or ((not self.last_full or self.refine_owed) and not self.previewing(now)))
 
     def next_due(self, now: float) -> float | None:
         """When the next frame may start (None: nothing to send until something changes)."""
@@ -533,6 +539,11 @@ class Session:
         if (want > keep and known(keep) and fits(keep, 1.25)) or (want < keep and not fits(want, 0.8)):
             want = keep
         self.refine_level = want
+        # a level that fits but was passed over for not being known yet is climbed to, a
+        # level a frame, also while paused: a drag's first preview may start on the last
+        # rung and forget what was measured (_recost), and a paused look then stayed on its
+        # next level, a quarter of the view's side, until the next input
+        self._climb = want > next((i for i in range(n) if fits(i, 1.0)), n - 1)
         return level(want)
 
     def start_frame(self, now: float, share: int = 1) -> FrameJob:
@@ -560,6 +571,9 @@ class Session:
         self.last_start = now
         self.dirty = False
         self.last_full = not preview
+        self.refine_owed = False
+        if preview:
+            self._climb = False
         return FrameJob(self.frame, self.version, still, msaa=not preview and msaa,
                         quality=min(v.quality, PREVIEW_QUALITY) if preview else v.quality,
                         full=not preview, playing=self.playing, show=self.showing(), layer=v.layer,
@@ -611,6 +625,8 @@ class Session:
             elif job.scene_cached:
                 self.scenes_lost[size] = now
             surprised = scene_reused != job.scene_cached
+        if job.full and job.version == self.version and job.level == self.refine_level:
+            self.refine_owed = self._climb   # measured (or, once, to be measured again)
         if once:   # it compiled a program or baked a noise tile: not what this look costs
             return
         self.last_ms = render_ms
