@@ -183,13 +183,19 @@ def tau_sphere(layer, fog, O, w, d, time):
 
 
 def body_frame(layer):
-    """x -> x in the body's frame: yaw about +y, then pitch about the body's x, then roll
-    about its z (intrinsic Y-X'-Z''), written here with scipy's rotations."""
+    """x -> x in the body's frame (a tuple of floats): yaw about +y, then pitch about the
+    body's x, then roll about its z (intrinsic Y-X'-Z''), the rotation written here with
+    scipy's rotations, applied in plain floats (it runs millions of times a suite)."""
     from scipy.spatial.transform import Rotation
     rot = Rotation.from_euler("YXZ", [layer.yaw, layer.pitch, layer.roll], degrees=True)
-    to_body = rot.inv().as_matrix()
-    c = np.asarray(layer.center, dtype=np.float64)
-    return lambda x: to_body @ (np.asarray(x, dtype=np.float64) - c)
+    (m00, m01, m02), (m10, m11, m12), (m20, m21, m22) = rot.inv().as_matrix().tolist()
+    cx, cy, cz = (float(v) for v in layer.center)
+
+    def frame(x):
+        x0, x1, x2 = float(x[0]) - cx, float(x[1]) - cy, float(x[2]) - cz
+        return (m00 * x0 + m01 * x1 + m02 * x2, m10 * x0 + m11 * x1 + m12 * x2,
+                m20 * x0 + m21 * x1 + m22 * x2)
+    return frame
 
 
 def body_level(layer, inset: float = 0.0):
@@ -198,23 +204,40 @@ def body_level(layer, inset: float = 0.0):
     less that (m), the ellipsoid's r^2 level less that (a nested body: a shell or a fade)."""
     frame = body_frame(layer)
     if layer.kind == "box":
-        h = np.asarray(layer.half_size, dtype=np.float64) - inset
-        return lambda x: float(np.max(np.abs(frame(x)) - h))
-    a = np.asarray(layer.radii, dtype=np.float64)
-    return lambda x: float(np.sum((frame(x) / a) ** 2) - 1.0 + inset)
+        h0, h1, h2 = (float(v) - inset for v in layer.half_size)
+
+        def box(x):
+            p0, p1, p2 = frame(x)
+            return max(abs(p0) - h0, abs(p1) - h1, abs(p2) - h2)
+        return box
+    a0, a1, a2 = (float(v) for v in layer.radii)
+
+    def ellipsoid(x):
+        p0, p1, p2 = frame(x)
+        return (p0 / a0) ** 2 + (p1 / a1) ** 2 + (p2 / a2) ** 2 - 1.0 + inset
+    return ellipsoid
+
+
+def _resolved(a: float, b: float) -> bool:
+    """The bracket [a, b] is as narrow as float64 can hold it (no further step moves it)."""
+    return abs(b - a) <= 4e-16 * max(1.0, abs(a), abs(b))
 
 
 def body_crossings(layer, O, w, d, iters=120, inset: float = 0.0) -> list[float]:
     """Where O + w s, s in [0, d], enters and leaves the body (O in the body's unslid
-    frame): the convex level's minimum by golden sections, then its zeros by bisection."""
-    O, w = np.asarray(O, dtype=np.float64), np.asarray(w, dtype=np.float64)
+    frame): the convex level's minimum by golden sections, then its zeros by bisection,
+    each until float64 resolves its bracket (at most `iters` steps)."""
+    o0, o1, o2 = (float(v) for v in O)
+    w0, w1, w2 = (float(v) for v in w)
     level = body_level(layer, inset)
 
     def f(s):
-        return level(O + w * s)
+        return level((o0 + w0 * s, o1 + w1 * s, o2 + w2 * s))
 
     lo, hi, g = 0.0, float(d), (math.sqrt(5) - 1) / 2
     for _ in range(iters):
+        if _resolved(lo, hi):
+            break
         a, b = hi - g * (hi - lo), lo + g * (hi - lo)
         if f(a) <= f(b):
             hi = b
@@ -228,6 +251,8 @@ def body_crossings(layer, O, w, d, iters=120, inset: float = 0.0) -> list[float]
         if f(a) <= 0:
             continue
         for _ in range(iters):
+            if _resolved(a, b):
+                break
             mid = (a + b) / 2
             a, b = (mid, b) if f(mid) > 0 else (a, mid)
         out.append((a + b) / 2)
@@ -269,8 +294,9 @@ def tau_body(layer, fog, O, w, d, time):
                     kinks.append(a + (target - p0[i]) / dp)
 
         def f(s):
-            p = np.abs(frame(Os + w * s))
-            return layer.density * float(np.prod(np.clip((h - p) / F, 0.0, 1.0)))
+            p = frame(Os + w * s)
+            return layer.density * math.prod(min(1.0, max(0.0, (float(h[i]) - abs(p[i])) / F))
+                                             for i in range(3))
         return _quad(f, a, b, kinks)
     fade = layer.edge_fade
     inner = body_crossings(layer, Os, w, d, inset=fade) if fade < 1.0 else []
