@@ -335,6 +335,20 @@ def test_the_fog_box_has_soft_faces(renderer):
         assert tau[1] > 0.05 and ratio[0] <= tau[0] / tau[1] <= ratio[1]
 
 
+def test_gawron_has_no_hard_horizon_line(renderer):
+    """gawron-distance's distance fog stopped at 75% opacity, so a quarter of the far land's
+    green showed under the sky: a hard straight line at the horizon (the mean row level
+    stepped 18 levels over 4 px at 640x360). Within 2 degrees of the horizon no 4 px step
+    of the mean row level exceeds 7 levels."""
+    img, still = render(renderer, "gawron-distance", w=640)
+    lum = img.astype(float).mean(axis=2).mean(axis=1)
+    elev = ray_elevations(still.camera, still.width, still.height)[::-1].mean(axis=1)   # rows top first
+    rows = np.flatnonzero(np.abs(elev) <= 2.0)
+    rows = rows[(rows >= 2) & (rows < len(lum) - 2)]
+    assert len(rows) > 10
+    assert float(np.abs(lum[rows - 2] - lum[rows + 2]).max()) <= 7.0
+
+
 @pytest.mark.parametrize("name", ["perlin-fog", "gawron-distance", "default", "biri-fig6"])
 def test_no_stripe_at_the_horizon(renderer, name):
     """perlin-fog showed a light stripe at the horizon (+10-16 levels), gawron-distance a

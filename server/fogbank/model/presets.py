@@ -227,11 +227,13 @@ def _presets() -> dict[str, dict[str, Any]]:
                            "sky in the fog at the horizon.",
             "params": {"camera": view, "fog_color": "#96938c",
                        "sun": {"azimuth": 30.0, "elevation": 9.0, "color": "#fff1d6", "intensity": 3.0},
-                       "effects": {"scatter": 0.6, "scatter_exponent": 4.0, "scatter_color": "#ffa033",
+                       "effects": {"scatter": 0.6, "scatter_exponent": 4.0, "scatter_color": "#ffb84d",
                                    "blur": "single", "blur_radius": 3.0, "tone_map": "neutral",
-                                   "aerial_perspective": 0.35},
+                                   "aerial_perspective": 1.0},
+                       # max 0.9 and the sky's colour in the far fog: at 0.75 a quarter of
+                       # the far land's green showed below the sky, a hard horizon line
                        "layers": [{"kind": "distance", "start": 10.0, "distance": 260.0, "exponent": 0.55,
-                                   "low": 0.8, "high": 1.2, "max": 0.75, "noise_scale": 90.0, "wind": False,
+                                   "low": 0.8, "high": 1.2, "max": 0.9, "noise_scale": 90.0, "wind": False,
                                    "drift": (2.0, 0.0, -1.0)}]},
         },
         "forest-shafts": {
