@@ -52,6 +52,16 @@ def test_markdown_report_from_results():
     assert "| 640x360 | 30 | 40 | 50 |" in md
 
 
+def test_the_lit_cost_is_reported_with_its_rounds_and_ratio():
+    from fogbank.tools.bench import lit_markdown
+    lit = {"lit, medium grid": {"ms": 60.0, "rounds": [61.0, 60.0, 59.0], "vs_before": 1.2},
+           "unlit": {"ms": 45.0, "rounds": [45.0], "vs_before": 0.9},
+           "before": {"ms": 50.0, "rounds": [50.0], "tree": "/tmp/old/server"}}
+    md = "\n".join(lit_markdown(lit))
+    assert "| lit, medium grid | 60.0 | 61.0, 60.0, 59.0 | 1.20x |" in md
+    assert "| before (/tmp/old/server) | 50.0 | 50.0 | - |" in md
+
+
 def test_process_boundary_is_measured_through_real_workers():
     from fogbank.tools.bench import process_boundary
     pb = process_boundary(n=20)

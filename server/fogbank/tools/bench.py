@@ -635,7 +635,10 @@ def run(out_dir: str = "docs", quick: bool = False, only_targets: bool = False,
         print(json.dumps(res["lit_cost"]))
         Path(out_dir).mkdir(parents=True, exist_ok=True)
         Path(out_dir, "bench-lit.json").write_text(json.dumps(res, indent=1))
-        print(f"wrote {out_dir}/bench-lit.json")
+        Path(out_dir, "bench-lit.md").write_text("\n".join(
+            ["# fogbank benchmark: lit fog's cost", "", f"`{res['command']}` on {res['cpu']}, {res['date']}.", ""]
+            + lit_markdown(res["lit_cost"])))
+        print(f"wrote {out_dir}/bench-lit.json and bench-lit.md")
         return res
     earlier = json.loads(Path(before).read_text()) if before else None   # read first: fail fast
     r = Renderer(create_context())
@@ -786,12 +789,34 @@ def targets_markdown(res: dict) -> list[str]:
     return L + [""]
 
 
+def lit_markdown(lit: dict) -> list[str]:
+    """Issue 32's figure: the still camera's 720p frame by light, and against the earlier code."""
+    before = lit.get("before")
+    L = ["## Lit fog's cost (issue 32)", "",
+         "The default look's 720p frame with the camera still and time running, as a stream draws "
+         "it (MSAA, the scene pass and the fog that does not move held; every pass, read back and "
+         "JPEG q80, the GL finished after each), each light in a fresh process, all in turn in each "
+         "round, median of the rounds (ms). The limit: at most 30% over the earlier code's frame, "
+         "or a quality setting a look can lower (`effects.light_quality`).", "",
+         "| light | ms | rounds | vs before |", "|---|---|---|---|"]
+    for label, row in lit.items():
+        ratio = f"{row['vs_before']:.2f}x" if "vs_before" in row else "-"
+        rounds = ", ".join(f"{v:.1f}" for v in row["rounds"])
+        name = f"before ({row['tree']})" if label == "before" and "tree" in row else label
+        L.append(f"| {name} | {row['ms']:.1f} | {rounds} | {ratio} |")
+    if before is None:
+        L += ["", "(no earlier tree was given: `--before-tree DIR`)"]
+    return L + [""]
+
+
 def markdown(res: dict) -> str:
     L = ["# fogbank benchmark", "",
          f"`{res['command']}` on {res['cpu']}, GL: {res['gl']['renderer']} ({res['gl']['version']}), "
          f"{res['date']}. Medians of repeats; ratios are of two things timed in the same run.", ""]
     if "targets" in res:
         L += targets_markdown(res)
+    if "lit_cost" in res.get("targets", {}):
+        L += lit_markdown(res["targets"]["lit_cost"])
     L += [
          "## 1. Analytic fog against raymarching", "",
          "Fog pass alone at 1280x720, one layer of each exponential kind (from the presets), "
