@@ -216,9 +216,11 @@ def test_the_sun_is_no_clipped_patch(renderer):
 def test_biri_fig7_the_house_is_clear_in_the_middle_misty_at_its_ends_and_the_waves_move(renderer):
     """Fig. 7: "we can see the middle of the house but ... the house extremities are
     surrounded by the mist"; Fig. 5: the density moves with the wind. The fog texels' T
-    at the front wall's middle is above T at either end (4.3 m out) by 0.03, one of them
-    by 0.06 (the figure's quartic rises to 2.8 on one side, 0.8 at its mirrored border on
-    the other; every ray crosses fog from the eye's side too), and
+    at the front wall's middle is above T at either end (4.3 m out) by 0.08, one of them
+    by 0.2 (the figure's quartic rises to 2.8 on one side, 0.8 at its mirrored border on
+    the other; every ray crosses fog from the eye's side too; measured 0.480 against 0.210
+    and 0.376, where the look a fresh eye found evenly veiled gave 0.233 against 0.190 and
+    0.163), and
     4 s later the fog elsewhere has moved (mean |dT| >= 0.005) while the middle stays clear."""
     from fogbank.scene.landmarks import landmarks
     hx, hy, hz = landmarks().house
@@ -237,8 +239,10 @@ def test_biri_fig7_the_house_is_clear_in_the_middle_misty_at_its_ends_and_the_wa
     wall = [(hx + dx, hy + 2.5, hz + 3.62) for dx in (0.0, -4.3, 4.3)]
     _, T0, _, _ = fog_only(renderer, still)
     mid, left, right = t_at(T0, wall)
-    assert mid >= max(left, right) + 0.03 and mid >= min(left, right) + 0.06
+    print(f"\nthe wall's T: middle {mid:.3f}, ends {left:.3f} and {right:.3f}")
+    assert mid >= max(left, right) + 0.08 and mid >= min(left, right) + 0.2
     _, T4, _, _ = fog_only(renderer, still.model_copy(update={"time": still.time + 4.0}))
+    print(f"mean |dT| over 4 s {float(np.abs(T4 - T0).mean()):.4f}")
     assert float(np.abs(T4 - T0).mean()) >= 0.005
     assert abs(t_at(T4, wall[:1])[0] - mid) <= 0.03
 
@@ -283,7 +287,9 @@ def test_the_clearing_is_carved_inside_standing_fog(renderer):
     """carved-clearing: the house was pixel-identical to the frame without fog, though
     ~22 m of dense fog lay between it and the eye (the carving took the whole ray's share).
     Now the house's texels keep the fog in front of them (T <= 0.9), and are clearer than
-    ground at the same distance beside the clearing (at least twice its T)."""
+    ground at the same distance beside the clearing: at least 4 times its T, a pocket of
+    clear air that shows (seen from 24 m up at the fog's level it was 2.2 times, 0.215
+    against 0.096, and a fresh eye saw no clearing; from above the fog, 0.479 against 0.051)."""
     from fogbank.scene.landmarks import landmarks
     from fogbank.scene import camera as cam
     hx, hy, hz = landmarks().house
@@ -300,7 +306,8 @@ def test_the_clearing_is_carved_inside_standing_fog(renderer):
     cols = np.abs(np.arange(T.shape[1])[None, :] - x) > 40   # beside the clearing
     outside = T[same & cols]
     assert len(outside) > 20
-    assert house >= 2.0 * float(np.median(outside))
+    print(f"\nthe house's T {house:.3f}, the ground beside at its distance {float(np.median(outside)):.3f}")
+    assert house >= 4.0 * float(np.median(outside))
 
 
 def test_gawron_scatter_is_orange(renderer):

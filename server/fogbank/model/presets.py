@@ -105,10 +105,14 @@ def _presets() -> dict[str, dict[str, Any]]:
                        "wind": {"direction": 0.0, "speed": 3.0},
                        "fog_color": "#8b95a1",
                        "effects": lit(scatter=0.12, sky_distance=250.0, cutoff_distance=240.0, cutoff_mode="fog"),
+                       # 2.7 m a unit on X: the wall's ends (4.3 m out) lie toward the tile's
+                       # dense side (P 2.7 and, mirrored, 1.0 against the middle's 0.33), a
+                       # wave of mist either side as in the figure; at 11.6 m a unit they
+                       # were P 0.55 and 0.8, and the wall read as evenly veiled
                        "layers": [
-                           {"kind": "polynomial", "density": 0.045, "coeffs": [0.8, -1.0, 0.0, 0.0, 1.0],
-                            "axis": (1 / 11.6, 0.0, 0.0), "offset": 0.63 - hx / 11.6, "half_width": 1.0},
-                           {"kind": "polynomial", "density": 0.012, "coeffs": [0.8, -1.0, 0.0, 0.0, 1.0],
+                           {"kind": "polynomial", "density": 0.02, "coeffs": [0.8, -1.0, 0.0, 0.0, 1.0],
+                            "axis": (1 / 2.7, 0.0, 0.0), "offset": 0.63 - hx / 2.7, "half_width": 1.0},
+                           {"kind": "polynomial", "density": 0.007, "coeffs": [0.8, -1.0, 0.0, 0.0, 1.0],
                             "axis": (0.0, 0.0, 1 / 12.0), "offset": 0.63 - hz / 12.0, "half_width": 1.0,
                             "wind": True}]},
         },
@@ -209,14 +213,19 @@ def _presets() -> dict[str, dict[str, Any]]:
                            "that removes the fog inside itself, and only there, its edge faded "
                            "in steps. The house stands clear inside standing fog, with the fog "
                            "between it and the eye still in front of it.",
-            "params": {"camera": {"position": (-95.0, 24.0, 40.0), "yaw": 40.0, "pitch": -6.0, "fov": 55.0},
+            # seen from above the fog, so that the clearing shows as a pocket of clear air
+            # round the house in the standing fog (from 24 m up, at the fog's level, it read
+            # only as a house a little less veiled than the ground beside it); the fog's
+            # base at 16 m covers the house's hill (at base 0 the hilltop stood clear of it
+            # whether carved or not)
+            "params": {"camera": {"position": (-95.0, 55.0, 40.0), "yaw": 40.0, "pitch": -18.0, "fov": 55.0},
                        "sun": {"azimuth": 150.0, "elevation": 25.0},
                        "fog_color": "#7d8896",
                        "effects": lit(scatter=0.1),
                        "layers": [
-                           {"kind": "height", "density": 0.05, "falloff": 0.04, "base": 0.0},
-                           {"kind": "ellipsoid", "center": (hx, hy, hz), "radii": (22.0, 14.0, 22.0),
-                            "density": 0.0, "carve": 1.0, "edge_fade": 0.6}]},
+                           {"kind": "height", "density": 0.06, "falloff": 0.09, "base": 16.0},
+                           {"kind": "ellipsoid", "center": (hx, hy, hz), "radii": (30.0, 18.0, 30.0),
+                            "density": 0.0, "carve": 1.0, "edge_fade": 0.5}]},
         },
         "gawron-distance": {
             "title": "Gawron & Boryczka 2018: distance fog",
