@@ -77,18 +77,26 @@ def plan_fog(fog, time: float, ref, sims: Simulations, split: bool = False, ligh
     plans of its layers that do not change with time and of the others (FogPlan.split);
     with `light` (a frame's, of a lit look), each particle's share of the sunlight, through
     the `whole` look's fog (a split half's particles are lit through every layer, not
-    only their half's: the moving half's smoke was lit as if no static fog stood toward the sun)."""
+    only their half's: the moving half's smoke was lit as if no static fog stood toward the sun).
+    `whole`: (the whole look, its packed particles, their light): a half whose particle
+    rows are the whole's takes their light as it is (computed once a frame)."""
     states = {i: sims.state(l, time, fog) for i, l in enabled(fog) if KINDS[l.kind].simulate}
     e = fog.effects
     n = fog.noise
-    halves = tuple(plan_fog(part, time, ref, sims, light=light, whole=fog)
-                   for part in split_by_time(fog)) if split else None
     packed = pack_layers(fog, states, ref, time)
+    lights = None
+    if light and e.lit and states:
+        if whole is not None and np.array_equal(packed.particles, whole[1]):
+            lights = whole[2]
+        else:
+            lights = particle_light(fog if whole is None else whole[0], packed, ref, time,
+                                    fog.sun.direction(), e.sky_distance)
+    halves = tuple(plan_fog(part, time, ref, sims, light=light, whole=(fog, packed.particles, lights))
+                   for part in split_by_time(fog)) if split else None
     return FogPlan(
         key=variant(fog),
         packed=packed,
-        particle_light=(particle_light(whole or fog, packed, ref, time, fog.sun.direction(), e.sky_distance)
-                        if light and e.lit and states else None),
+        particle_light=lights,
         has_particles=bool(states),
         noise=(n.size, n.octaves, n.blur, n.seed) if uses_noise(fog) else None,
         uniforms={"uStartDistance": e.start_distance, "uCutoffDistance": e.cutoff_distance,
