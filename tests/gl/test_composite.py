@@ -85,7 +85,8 @@ def test_a_held_frame_equals_the_full_composite_of_the_same_look(renderer, effec
 
 
 @pytest.mark.parametrize("change", [{"anisotropy": -0.4}, {"phase": "gawron", "scatter_exponent": 4.0},
-                                    {"scatter_start": 60.0}, {"shafts": 0.3}, {"sky_affect": 0.2}])
+                                    {"scatter_start": 60.0}, {"shafts": 0.3}, {"sky_affect": 0.2},
+                                    {"aerial_perspective": 0.0}, {"aerial_perspective": 0.9}])
 def test_an_effect_changed_over_held_fog_redraws_the_held_inputs(renderer, change):
     """Time runs, the camera stays, and an effect the held inputs keep changes: the fog
     stays held (it does not read the effect) and the next frame is the new look's."""

@@ -243,7 +243,9 @@ class HeldFog:
 
     def composite_inputs(self, ctx: moderngl.Context, size: tuple[int, int]) -> moderngl.Framebuffer:
         if self.inputs is None:
-            texs = [ctx.texture(size, 4, dtype="u4"), ctx.texture(size, 4, dtype="f2")]
+            # AB, W and the fog's sky haze per pixel (passes/composite_inputs.frag)
+            texs = [ctx.texture(size, 4, dtype="u4"), ctx.texture(size, 4, dtype="f2"),
+                    ctx.texture(size, 4, dtype="f2")]
             for t in texs:
                 t.filter = (moderngl.NEAREST, moderngl.NEAREST)
             self.inputs = ctx.framebuffer(color_attachments=texs)

@@ -18,8 +18,9 @@ from fogbank.render.targets import FAR_LIST_WIDTH, SILHOUETTE_TILE
 
 BLUR_MODES = {"off": 0, "single": 1, "separate": 2}
 HELD_UNIFORMS = ("uFogColor", "uScatterColor", "uMaxOpacity", "uExposureScale")
-# and with aerial perspective, what the fog's colour per pixel needs (composite_held.glsl)
-HELD_AERIAL_UNIFORMS = ("uFwd", "uRight", "uUp", "uAerial", "uSkyDistance")
+# and with aerial perspective, the sky's share of the fog's colour (its haze per pixel is
+# kept: composite_held.glsl)
+HELD_AERIAL_UNIFORMS = ("uAerial",)
 # A held composite's 4x4 tile blends its fog bilinearly unless a pixel's kept depth-aware
 # weight differs from its bilinear one by more than this (passes/held_edges.frag). At
 # 1280x720 of the default look 0.01 leaves 16% of the tiles to the kept weights (0.002:
@@ -36,9 +37,11 @@ def blur_sigma(f) -> float:
 
 def held_inputs_key(f) -> tuple:
     """What the held composite's inputs depend on besides the held fog (and the scene pass
-    it was drawn over): the in-scattering lobe's effects and the sky's share of fog."""
+    it was drawn over): the in-scattering lobe's effects, the sky's share of fog, and the
+    sky's haze (aerial perspective on or off, and the sky distance it depends on)."""
     e = f.still.effects
-    return (f.held_fog.key, e.phase, e.anisotropy, e.scatter_exponent, e.scatter_start, e.sky_affect)
+    return (f.held_fog.key, e.phase, e.anisotropy, e.scatter_exponent, e.scatter_start, e.sky_affect,
+            e.aerial_perspective > 0, e.sky_distance)
 
 
 class CompositePass(Pass):
@@ -102,7 +105,7 @@ class CompositePass(Pass):
             # the held composite reads only the colours and the max opacity per frame
             set_uniforms(prog, {k: uniforms[k] for k in held_names} if i < n_held else uniforms)
         if held:   # the held composite and, for the near surface, the two-surface draw
-            for name, tex in zip(("uHeldAB", "uHeldW"), inputs.color_attachments):
+            for name, tex in zip(("uHeldAB", "uHeldW", "uHeldHaze"), inputs.color_attachments):
                 tex.use(TEX[name])
         if mode == BLUR_MODES["single"]:
             g.mipmaps()   # the fused blur reads the scene's mip pyramid
@@ -229,7 +232,7 @@ class CompositePass(Pass):
         if h.inputs_key == key:
             return fbo
         prog = r.programs.get(FULLSCREEN, "passes/composite_inputs.frag", FOG_SCALE=e.fog_scale,
-                              SUN_LIGHT=defines["SUN_LIGHT"])
+                              SUN_LIGHT=defines["SUN_LIGHT"], AERIAL=defines["AERIAL"])
         set_uniforms(prog, {"uFwd": v.fwd, "uRight": v.right, "uUp": v.up, "uSunDir": look.sun.direction(),
                             "uScatterStart": e.scatter_start, "uSkyDistance": e.sky_distance,
                             "uSkyAffect": e.sky_affect, "uScatterExponent": e.scatter_exponent,

@@ -8,6 +8,7 @@ uniform usampler2D uHeldAB;       // A and B as eight halves:
                                   //   A (scene less direct sunlight, linear; in-scattering lobe)
                                   //   B (direct sunlight, linear; the pixel's share of its fog)
 uniform sampler2D uHeldW;         // the four fog texels' upsample weights
+uniform sampler2D uHeldHaze;      // with AERIAL, the sky's haze along the pixel's ray (fogHaze)
 
 // The fog texels' (raw T, T toward the sun, in-scattered sunlight) at px by the kept weights.
 vec3 heldFogT(ivec2 px) {
@@ -43,10 +44,8 @@ vec4 heldNearOf(ivec2 px, vec3 Ts) {
     scene += Ts.y * b.rgb;   // the scene less the share 1 - T_sun of its direct sunlight
 #endif
 #if AERIAL
-    // the fog's colour depends on the view ray and the distance: per pixel (uInvDist is the
-    // held scene pass's)
-    vec3 w = viewRay((vec2(px) + 0.5) / vec2(textureSize(uHeldAB, 0)) * 2.0 - 1.0, uFwd, uRight, uUp);
-    vec3 ambient = fogAmbient(w, texelFetch(uInvDist, px, 0).r);
+    // the fog's colour depends on the view ray and the distance, both still: kept per pixel
+    vec3 ambient = fogAmbientOf(texelFetch(uHeldHaze, px, 0).rgb);
 #else
     vec3 ambient = uFogColor;
 #endif

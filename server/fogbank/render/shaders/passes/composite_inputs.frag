@@ -9,8 +9,10 @@
 //     B: (the direct sunlight, linear; the share of its fog the pixel shows: 1 for a
 //         surface, uSkyAffect for the sky)
 //   W: the depth-aware upsample's weights of the four fog texels (fogWeights)
+//   Haze: with AERIAL, the sky's haze along the pixel's ray to its surface (fogHaze; an
+//       RGBA16F texel: 8 bytes)
 // so that each frame (passes/composite_held.frag) only blends the moving fog texels.
-// Defined by the renderer: FOG_SCALE (1, 2, 4), SUN_LIGHT.
+// Defined by the renderer: FOG_SCALE (1, 2, 4), SUN_LIGHT, AERIAL.
 // packHalf2x16 / unpackHalf2x16 (core from GLSL 4.20): the held inputs' AB
 #extension GL_ARB_shading_language_packing : require
 #include "common/camera.glsl"
@@ -21,6 +23,7 @@ uniform sampler2D uSunLight;      // the direct sunlight in the scene colour, li
 uniform float uSkyAffect;         // the share of its fog a sky pixel shows
 layout(location = 0) out uvec4 fAB;
 layout(location = 1) out vec4 fW;
+layout(location = 2) out vec4 fHaze;
 
 void main() {
     ivec2 px = ivec2(gl_FragCoord.xy);
@@ -41,5 +44,10 @@ void main() {
 #endif
     vec4 a = vec4(scene - sun, scatterLobe(w, invd));
     vec4 b = vec4(sun, invd <= 0.0 ? uSkyAffect : 1.0);
+#if AERIAL
+    fHaze = vec4(fogHaze(w, invd), 1.0);
+#else
+    fHaze = vec4(0.0);
+#endif
     fAB = uvec4(packHalf2x16(a.rg), packHalf2x16(a.ba), packHalf2x16(b.rg), packHalf2x16(b.ba));
 }

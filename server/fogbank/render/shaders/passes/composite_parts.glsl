@@ -80,15 +80,30 @@ vec3 fogLight(float T, float Traw, float J, float lobe, vec3 ambient) {
     return (1.0 - T) * ambient + uScatterColor * lobe * (J * share);
 }
 
-// The fog's colour lit by the sky along the unit view ray w to a surface at 1/distance
-// invd (0: the sky): uFogColor, and with aerial perspective (AERIAL) the sky's haze in
-// that direction for the share uAerial (common/sky.glsl skyHaze), blurred toward the sky's
-// mean for fog near the eye (Godot samples its sky's radiance at a mip by depth likewise).
-// The distant land and the sky just above the horizon then meet in the same colour.
+// The sky's haze in the fog along the unit view ray w to a surface at 1/distance invd (0:
+// the sky): its colour in that direction (common/sky.glsl skyHaze), blurred toward the
+// sky's mean for fog near the eye (Godot samples its sky's radiance at a mip by depth
+// likewise). The distant land and the sky just above the horizon then meet in the same
+// colour. A held composite keeps it per pixel (passes/composite_inputs.frag).
+vec3 fogHaze(vec3 w, float invd) {
+    float d = invd > 0.0 ? 1.0 / invd : uSkyDistance;
+    return skyHaze(w, clamp(d / uSkyDistance, 0.0, 1.0));
+}
+
+// The fog's colour lit by the sky, from the haze along its ray: uFogColor, and with aerial
+// perspective (AERIAL) the haze for the share uAerial.
+vec3 fogAmbientOf(vec3 haze) {
+#if AERIAL
+    return mix(uFogColor, haze, uAerial);
+#else
+    return uFogColor;
+#endif
+}
+
+// The same along the unit view ray w to a surface at 1/distance invd.
 vec3 fogAmbient(vec3 w, float invd) {
 #if AERIAL
-    float d = invd > 0.0 ? 1.0 / invd : uSkyDistance;
-    return mix(uFogColor, skyHaze(w, clamp(d / uSkyDistance, 0.0, 1.0)), uAerial);
+    return fogAmbientOf(fogHaze(w, invd));
 #else
     return uFogColor;
 #endif
