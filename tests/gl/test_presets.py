@@ -323,6 +323,22 @@ def test_gawron_scatter_is_orange(renderer):
     assert float(np.median(hsv[:, 1])) >= 0.25
 
 
+def test_gawron_scatter_stays_near_the_sun(renderer):
+    """Fig. 3: "a soft orange scattering from a light source is added to the grey-blue fog".
+    The preset's lobe (exponent 4) washed the frame's sun side peach: red stood over blue by
+    41 levels (median) from 30 to 40 degrees off the sun. Within 15 degrees of the sun the
+    fog is orange (red over blue by 40 levels or more); from 30 to 40 degrees it is the
+    grey-blue fog (red at most blue's)."""
+    img, still = render(renderer, "gawron-distance", w=320)
+    ang = angles_to(still, still.sun.direction())
+    rb = img[..., 0].astype(float) - img[..., 2].astype(float)
+    near, off = rb[(ang < 15.0) & (ang > 3.0)], rb[(ang > 30.0) & (ang < 40.0)]
+    print(f"\nred - blue: near the sun {float(np.median(near)):.1f}, 30-40 degrees off {float(np.median(off)):.1f}")
+    assert len(near) > 100 and len(off) > 1000
+    assert float(np.median(near)) >= 40.0
+    assert float(np.median(off)) <= 0.0
+
+
 def test_the_fog_box_has_soft_faces(renderer):
     """fog-volumes: the box read as a frosted-glass slab, its faces hard. Through the
     frame's GLSL (the transmittance API), 1 m of fog 0.2 m inside its top face holds under
