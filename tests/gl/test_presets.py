@@ -267,19 +267,23 @@ def test_fischer_smoke_rises_spreads_and_moves(renderer):
     assert float(np.median(share)) < 0.5
 
 
-@pytest.mark.parametrize("name,shade", [("fischer-fog", 0.03), ("forest-shafts", 0.05), ("shaded-valley", 0.05)])
-def test_fog_in_shadow_is_darker_than_fog_in_sun(renderer, name, shade):
+@pytest.mark.parametrize("name,shade,depth", [("fischer-fog", 0.03, 6.0), ("forest-shafts", 0.05, 6.0),
+                                              ("shaded-valley", 0.35, 15.0)])
+def test_fog_in_shadow_is_darker_than_fog_in_sun(renderer, name, shade, depth):
     """The fog was as bright in shadow as in sun. The same frame without the scene's
     shadows in the fog (effects.shafts 0) against the preset's: on at least `shade` of the
     view the preset's fog is darker by 4 levels or more (the shadows of trees and hills
-    through the fog), with a median of at least 6 levels there, and never lighter than
-    rounding (the shadows only take light away)."""
+    through the fog), with a median of at least `depth` levels there, and never lighter
+    than rounding (the shadows only take light away). shaded-valley's shade is a large
+    region: a fresh eye saw none where 27% of the view was darker by a median of 9 levels
+    (the sky lit the shaded fog nearly as brightly as the sun); now half the view, by 28."""
     img, still = render(renderer, name, w=320)
     plain, _ = render(renderer, name, w=320, effects={"shafts": 0.0})
     drop = (plain - img).mean(axis=2)
     dark = drop >= 4.0
+    print(f"\n{name}: {float(dark.mean()):.3f} of the view darker, by {float(np.median(drop[dark])):.1f} levels (median)")
     assert float(dark.mean()) >= shade
-    assert float(np.median(drop[dark])) >= 6.0
+    assert float(np.median(drop[dark])) >= depth
     assert float(drop.min()) >= -2.0
 
 

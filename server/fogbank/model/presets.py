@@ -263,17 +263,21 @@ def _presets() -> dict[str, dict[str, Any]]:
         "shaded-valley": {
             "title": "A shaded valley filled with fog",
             "source": "fogbank: single scattering in height fog, the hills' shadow from the shadow map",
-            "description": "A low sun from the east over the ridge: the fog filling the river "
-                           "valley lies in the hill's shadow and is lit by the sky alone, darker "
-                           "than the fog on the sunny slopes above it.",
-            "params": {"camera": {"position": (-60.0, 32.0, 60.0), "yaw": 100.0, "pitch": -13.0, "fov": 60.0},
-                       "sun": {"azimuth": 75.0, "elevation": 7.0, "color": "#ffe0b0", "intensity": 3.2},
+            "description": "Looking up the river valley with a low sun from the east: the fog "
+                           "filling the valley lies in the eastern hill's shadow, lit by the sky "
+                           "alone, a dark band between the sunlit fog over the western slope and "
+                           "the golden haze beyond; the trees' shadows run through it.",
+            "params": {"camera": {"position": (10.0, 30.0, -150.0), "yaw": 180.0, "pitch": -10.0, "fov": 60.0},
+                       "sun": {"azimuth": 110.0, "elevation": 8.0, "color": "#ffe0b0", "intensity": 3.2},
                        "fog_color": "#56616f",
                        # the "high" grid: at "medium" the low sun's grazing shadows over the
                        # valley floor (2 shadow taps a slice, a column every 16 px) read as
-                       # bright blotches in the fog; the trees' shafts show at "high"
-                       "effects": lit(scatter=0.15, anisotropy=0.4, sky_distance=300.0, light_quality="high"),
-                       "layers": [{"kind": "height", "density": 0.04, "falloff": 0.2, "base": 3.0}]},
+                       # bright blotches in the fog. Little of the sky's haze (aerial 0.15):
+                       # at 0.6 the sky lit the shaded fog about as brightly as the sun lit
+                       # the rest, and the valley's shade did not show
+                       "effects": lit(scatter=0.45, anisotropy=0.4, sky_distance=300.0, light_quality="high",
+                                      aerial_perspective=0.15),
+                       "layers": [{"kind": "height", "density": 0.06, "falloff": 0.15, "base": 5.0}]},
         },
     }
 
