@@ -199,18 +199,24 @@ def angles_to(still, direction):
     return np.degrees(np.arccos(np.clip(rays @ np.asarray(direction), -1, 1))).reshape(h, w)
 
 
-def test_the_sun_is_no_clipped_patch(renderer):
+@pytest.mark.parametrize("name", ["default", "gawron-distance", "shaded-valley"])
+def test_the_sun_is_no_clipped_patch(renderer, name):
     """The default look's sun was a flat clipped patch: 3.2% of the frame at 255 (a 190 x
-    210 px area at 1280x720), red clipped over ~500 px, a colour shift at its edge. Tone
-    mapped (Khronos PBR Neutral), no pixel farther than 2 degrees from the sun's centre
-    (its disc is ~0.8 degrees) has a channel at 254 or more, and the glow keeps its hue."""
-    img, still = render(renderer, "default")
+    210 px area at 1280x720), red clipped over ~500 px, a colour shift at its edge; a fresh
+    eye found gawron-distance's scatter a clipped peach disc (130k pixels of 921k with a
+    channel at 250 or more). Tone mapped (Khronos PBR Neutral), no pixel farther than 2
+    degrees from the sun's centre (its disc is ~0.8 degrees) has a channel at 254 or
+    more, and where the sun is in view its glow is rolled off, not cut: brighter near the
+    sun than 30 degrees away."""
+    img, still = render(renderer, name)
     ang = angles_to(still, still.sun.direction())
     far = ang > 2.0
     assert far.mean() > 0.95
+    print(f"\n{name}: {float((img.max(axis=2) >= 254)[far].mean()):.4f} of the frame clipped off the sun")
     assert float((img.max(axis=2) >= 254)[far].mean()) == 0.0
     # the glow is there, rolled off: brighter near the sun than 30 degrees away
-    assert float(img[(ang > 2.0) & (ang < 6.0)].mean()) >= float(img[(ang > 28.0) & (ang < 32.0)].mean()) + 10.0
+    if ((ang > 2.0) & (ang < 6.0)).sum() > 100:
+        assert float(img[(ang > 2.0) & (ang < 6.0)].mean()) >= float(img[(ang > 28.0) & (ang < 32.0)].mean()) + 10.0
 
 
 def test_biri_fig7_the_house_is_clear_in_the_middle_misty_at_its_ends_and_the_waves_move(renderer):
