@@ -123,7 +123,7 @@ class Effects(Strict):
                         "(0 = none, 1 = all of it)", group="Light")
     light_quality: Literal["low", "medium", "high"] = Field(
         "medium", json_schema_extra=grouped("Light"), description="the light grid of lit fog and shafts: "
-        "one view ray every 32, 16 or 8 px, cut into 12, 16 or 32 slices, with 2, 2 or 4 shadow-map samples "
+        "one view ray every 32, 16 or 8 px, cut into 12, 16 or 32 slices, with 2, 2 or 8 shadow-map samples "
         "a slice (previews take 'low'); the fog's transmittance is exact at every quality")
     sun_through_fog: Bool = Field(
         False, json_schema_extra=grouped("Light"), description="dim the sunlight on each surface by the fog between it and the sun: "
