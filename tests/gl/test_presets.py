@@ -404,6 +404,22 @@ def test_gawron_has_no_hard_horizon_line(renderer):
     assert float(np.abs(lum[rows - 2] - lum[rows + 2]).max()) <= 7.0
 
 
+@pytest.mark.parametrize("name,most", [("quilez-spheres", 100.0), ("fischer-fog", 110.0)])
+def test_the_far_land_pales_into_the_sky(renderer, name, most):
+    """A fresh eye saw the clear looks' world edge as a hard, ruler-straight green line
+    against the sky: the land within 1.3 degrees below the horizon and the sky within 1.3
+    degrees above differed by 159 (quilez-spheres) and 196 (fischer-fog) levels in blue.
+    The air's haze (common/sky.glsl atmosphereHaze) pales the far land toward the sky's
+    colour there: 78 and 91 now."""
+    img, still = render(renderer, name, w=640)
+    elev = ray_elevations(still.camera, still.width, still.height)[::-1]   # rows top first
+    below, above = (elev < -0.3) & (elev > -1.3), (elev > 0.3) & (elev < 1.3)
+    assert below.sum() > 500 and above.sum() > 500
+    d = np.abs(img[below].mean(axis=0) - img[above].mean(axis=0))
+    print(f"\n{name}: land against sky at the horizon {d.round(1)} levels")
+    assert float(d.max()) <= most
+
+
 @pytest.mark.parametrize("name", ["perlin-fog", "gawron-distance", "default", "biri-fig6"])
 def test_no_stripe_at_the_horizon(renderer, name):
     """perlin-fog showed a light stripe at the horizon (+10-16 levels), gawron-distance a

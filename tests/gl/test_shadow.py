@@ -130,6 +130,15 @@ def test_the_scene_pass_lights_each_terrain_pixel_by_the_lightmap_at_its_place(r
     ambient = grd + (sky - grd) * (n[:, 1:2] * 0.5 + 0.5)
     sun_color = np.array(srgb_to_linear(still.sun.color)) * still.sun.intensity
     c, s = color.reshape(-1, 3)[on], sun.reshape(-1, 3)[on]
+    # the air's haze between (common/sky.glsl atmosphereHaze), taken off: the surface keeps
+    # exp(-d / 3000 m) of its light, and the rest is the horizon sky's colour with the sun's
+    # glow in the pixel's horizontal direction
+    air = np.exp(-d[on] / 3000.0)[:, None]
+    hor = dirs[on] * [1.0, 0.0, 1.0]
+    hor /= np.linalg.norm(hor, axis=1, keepdims=True)
+    cos_sun = np.maximum(hor @ L, 0.0)[:, None]
+    haze = np.array([0.62, 0.70, 0.80]) + sun_color * (0.05 * cos_sun ** 8 + 0.25 * cos_sun ** 180)
+    c, s = (c - (1.0 - air) * haze) / air, s / air
     vis = (s[:, 1] / (c[:, 1] - s[:, 1])) * ambient[on, 1] / (sun_color[1] * 0.55 * ndl[on])
     ref = _pcf(depth, svp, L, pts[on], n[on])
     diff = np.abs(vis - ref)

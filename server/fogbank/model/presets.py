@@ -236,12 +236,12 @@ def _presets() -> dict[str, dict[str, Any]]:
                            "sky in the fog at the horizon.",
             "params": {"camera": view, "fog_color": "#96938c",
                        # the sun at 10 degrees (at 9 the trees' shadows over the river bank
-                       # stepped in a sawtooth); the lobe's exponent 20 keeps the orange
+                       # stepped in a sawtooth); the lobe's exponent 16 keeps the orange
                        # round the sun (at 4 it washed the whole sun side peach), and its
                        # strength 0.9 under the tone map's shoulder (at 1.5, 130k pixels
                        # clipped in a flat peach disc)
                        "sun": {"azimuth": 18.0, "elevation": 10.0, "color": "#fff1d6", "intensity": 3.0},
-                       "effects": {"scatter": 0.9, "scatter_exponent": 20.0, "scatter_color": "#ffb84d",
+                       "effects": {"scatter": 0.9, "scatter_exponent": 16.0, "scatter_color": "#ffb84d",
                                    "blur": "single", "blur_radius": 3.0, "tone_map": "neutral",
                                    "aerial_perspective": 1.0},
                        # max 0.9 and the sky's colour in the far fog: at 0.75 a quarter of

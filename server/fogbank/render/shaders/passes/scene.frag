@@ -3,7 +3,8 @@
 // the composite dims it by the fog toward the sun when effects.sun_through_fog is on).
 // TERRAIN 1: the ground (procedural grass, road, banks, rock; sun visibility from the
 // baked lightmap). TERRAIN 0: everything else, by material: 0 vertex colour, 2 water,
-// 3 unlit (calibration scene: colour out = albedo exactly). Two programs, not a branch:
+// 3 unlit (calibration scene: colour out = albedo exactly). Every lit surface is seen
+// through the air's haze (common/sky.glsl atmosphereHaze). Two programs, not a branch:
 // llvmpipe runs both sides of a branch under a lane mask, so every fragment paid for the
 // terrain's albedo and the water's reflection.
 #include "common/sky.glsl"
@@ -67,6 +68,10 @@ void main() {
         sun *= 1.0 - f;
     }
 #endif
+    // the air between (common/sky.glsl): its share of the light is the sky's haze
+    float air = exp(-dist / ATMOSPHERE_M);
+    c = mix(atmosphereHaze(w, uSunDir, uSunColor), c, air);
+    sun *= air;
     fColor = vec4(c, 1.0);
     fSunLight = vec4(sun, 1.0);
 }
