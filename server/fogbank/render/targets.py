@@ -37,10 +37,10 @@ HELD_LIGHT_BPS = 16
 HELD_FOG_BPP = 16
 HELD_DIRECT_BPP = 4
 # the held composite's inputs (passes/composite_inputs.frag), per pixel: A and B packed as
-# halves in an RGBA32UI, and W in an RGBA16F;
+# halves in an RGBA32UI, W in an RGBA16F and the sky's haze in another;
 # and, over a coarser fog, the depth24 that marks where it needs the depth-aware weights
 # (passes/held_edges.frag)
-HELD_INPUTS_BPP = 16 + 8
+HELD_INPUTS_BPP = 16 + 8 + 8
 HELD_EDGES_BPP = 4
 # the held composite's two-surface pixels (HeldFog.far_pixels): per SILHOUETTE_TILE tile an
 # RG32I (its first pixel's place in the list, a mask of its pixels listed), and per listed
