@@ -23,10 +23,15 @@ vec3 skyHaze(vec3 w, float far) {
 
 // A clear-sky gradient with a sun disk and glow, linear RGB. w: unit view direction,
 // L: unit direction to the sun, sun: sun colour times intensity.
+// The sun's glow (no disc) in a direction at cosSun >= 0 from it.
+vec3 sunGlow(float cosSun, vec3 sun) {
+    return sun * (0.05 * pow(cosSun, 8.0) + 0.25 * pow(cosSun, 180.0));
+}
+
 vec3 skyColor(vec3 w, vec3 L, vec3 sun) {
     vec3 c = skyGradient(w);
     float cosSun = max(dot(w, L), 0.0);
-    c += sun * (0.05 * pow(cosSun, 8.0) + 0.25 * pow(cosSun, 180.0));
+    c += sunGlow(cosSun, sun);
     c += sun * smoothstep(0.99985, 0.99995, cosSun);    // the disk, ~0.8 deg across
     return c;
 }
@@ -48,6 +53,6 @@ vec3 atmosphereHaze(vec3 w, vec3 L, vec3 sun) {
     vec3 h = vec3(w.x, 0.0, w.z);
     float len = length(h);
     h = len > 1e-6 ? h / len : vec3(1.0, 0.0, 0.0);
-    float cosSun = max(dot(h, L), 0.0);
-    return skyGradient(h) + sun * (0.05 * pow(cosSun, 8.0) + 0.25 * pow(cosSun, 180.0));
+    // the sky's gradient at the horizon is SKY_HORIZON itself (skyGradient, up = 0)
+    return SKY_HORIZON + sunGlow(max(dot(h, L), 0.0), sun);
 }
