@@ -14,11 +14,7 @@ import pytest
 
 from fogbank.model.params import StillParams
 from fogbank.render.passes.blur import BlurPass
-
-
-def _srgb_to_linear(v: np.ndarray) -> np.ndarray:
-    v = v / 255.0
-    return np.where(v <= 0.04045, v / 12.92, ((v + 0.055) / 1.055) ** 2.4)
+from calibration import srgb_to_linear_array
 
 
 def _blurred_step(renderer, sigma: float, width: int = 320, height: int = 48, edge: int = 160,
@@ -36,7 +32,7 @@ def _blurred_step(renderer, sigma: float, width: int = 320, height: int = 48, ed
     src.write(img.astype(np.float16).tobytes())
     BlurPass().run(renderer, SimpleNamespace(still=still, targets=targets))
     row = targets.read_image(3)[height // 2].astype(np.float64)
-    return _srgb_to_linear(row).mean(axis=1)
+    return srgb_to_linear_array(row).mean(axis=1)
 
 
 @pytest.mark.parametrize("sigma", [3.0, 6.0, 12.0, 16.0])
