@@ -52,9 +52,14 @@ def _presets() -> dict[str, dict[str, Any]]:
     view = {"position": (-15.0, 34.0, 95.0), "yaw": 5.0, "pitch": -13.0, "fov": 60.0}
     house_view = {"position": (-58.0, 22.0, 12.0), "yaw": 25.0, "pitch": -8.0, "fov": 55.0}
     cx, cy, cz = _house_chimney()
-    smoke = {"kind": "particles", "count": 96, "emitter": (cx, cy + 0.8, cz), "direction": (0.0, 1.0, 0.0),
-             "spread": 14.0, "speed": 2.4, "life_min": 16, "life_max": 36, "step": 0.3,
-             "radius": 1.7, "alpha": 0.7, "drag": 0.45, "gravity": 0.5, "wind": True, "seed": 3}
+    # born 0.8 m down the chimney (its top is cy + 0.4): a newborn fades in over its first
+    # 2 steps (kinds/particle_motion.py FADE_IN_STEPS, 1.4 m at 2.4 m/s), which left a gap
+    # between the chimney and the smoke when born above it; a 28 degree cone and lives to
+    # 13 s spread the plume from the chimney's width to about 6 m (at 14 degrees and 11 s
+    # it stayed a tube)
+    smoke = {"kind": "particles", "count": 160, "emitter": (cx, cy - 0.8, cz), "direction": (0.0, 1.0, 0.0),
+             "spread": 28.0, "speed": 2.4, "life_min": 20, "life_max": 44, "step": 0.3,
+             "radius": 2.0, "alpha": 0.7, "drag": 0.45, "gravity": 0.5, "wind": True, "seed": 3}
     return {
         "default": {
             "title": "Valley mist at sunrise",
@@ -236,14 +241,17 @@ def _presets() -> dict[str, dict[str, Any]]:
                            "sky in the fog at the horizon.",
             "params": {"camera": view, "fog_color": "#96938c",
                        # the sun at 10 degrees (at 9 the trees' shadows over the river bank
-                       # stepped in a sawtooth); the lobe's exponent 16 keeps the orange
+                       # stepped in a sawtooth); the lobe's exponent 10 keeps the orange
                        # round the sun (at 4 it washed the whole sun side peach), and its
-                       # strength 0.9 under the tone map's shoulder (at 1.5, 130k pixels
-                       # clipped in a flat peach disc)
+                       # strength 0.4 and the exposure -0.5 EV below the tone map's
+                       # shoulder, a soft gradient (at 0.9 and 0 EV a sixth of the frame sat
+                       # at red 245-253, a flat peach column; at 1.5, 130k pixels clipped);
+                       # the sky's share 0.7 of the fog's colour keeps the fog grey-blue and
+                       # lets the orange read as orange over it (at 1.0, pale salmon)
                        "sun": {"azimuth": 18.0, "elevation": 10.0, "color": "#fff1d6", "intensity": 3.0},
-                       "effects": {"scatter": 0.9, "scatter_exponent": 16.0, "scatter_color": "#ffb84d",
+                       "effects": {"scatter": 0.4, "scatter_exponent": 10.0, "scatter_color": "#ffb84d",
                                    "blur": "single", "blur_radius": 3.0, "tone_map": "neutral",
-                                   "aerial_perspective": 1.0},
+                                   "exposure": -0.5, "aerial_perspective": 0.7},
                        # max 0.9 and the sky's colour in the far fog: at 0.75 a quarter of
                        # the far land's green showed below the sky, a hard horizon line
                        "layers": [{"kind": "distance", "start": 10.0, "distance": 260.0, "exponent": 0.55,
@@ -276,10 +284,14 @@ def _presets() -> dict[str, dict[str, Any]]:
                        # valley floor (2 shadow taps a slice, a column every 16 px) read as
                        # bright blotches in the fog. Little of the sky's haze (aerial 0.15):
                        # at 0.6 the sky lit the shaded fog about as brightly as the sun lit
-                       # the rest, and the valley's shade did not show
+                       # the rest, and the valley's shade did not show. The fog thins over
+                       # 10 m (falloff 0.1): at 6.7 m (0.15) its top met the sky in a razor
+                       # line, the row level stepping 7.8 levels over 4 px; and -0.6 EV keeps
+                       # its sunlit band off the tone map's shoulder (4% of the frame at 245
+                       # or more, a near-clipped peach band)
                        "effects": lit(scatter=0.45, anisotropy=0.4, sky_distance=300.0, light_quality="high",
-                                      aerial_perspective=0.15),
-                       "layers": [{"kind": "height", "density": 0.06, "falloff": 0.15, "base": 5.0}]},
+                                      aerial_perspective=0.15, exposure=-0.6),
+                       "layers": [{"kind": "height", "density": 0.04, "falloff": 0.1, "base": 5.0}]},
         },
     }
 
