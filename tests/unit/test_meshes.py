@@ -341,3 +341,20 @@ def test_the_terrain_at_one_level_tiles_the_plane_without_a_crack(level):
     assert int((~on_border).sum()) == 0
     if level:
         assert len(idx) < len(meshes.terrain_at_level(m, level - 1))
+
+
+def test_the_house_stands_on_a_terrace_not_a_plinth():
+    """A fresh eye saw a grey block under the house in every view of it: on its slope the
+    ground under its walls fell 3 m from one side to the other, and the plinth under the
+    walls stood 3.1 m (plus 0.4 m sunk) out of the lowest. The ground under its footprint
+    and a metre round it now lies within 5 cm of one level (the terrace), and its plinth is
+    0.5 m from bottom to top."""
+    from fogbank.scene import terrain
+    from fogbank.scene.landmarks import HOUSE
+    from fogbank.scene.meshes import _house
+    hx, hz = HOUSE
+    x, z = np.meshgrid(np.linspace(hx - 6.0, hx + 6.0, 25), np.linspace(hz - 4.6, hz + 4.6, 19))
+    ground = terrain.height(x, z)
+    assert float(ground.max() - ground.min()) <= 0.05
+    plinth = _house()[0]
+    assert abs(float(plinth[:, 1].max() - plinth[:, 1].min()) - 0.5) <= 1e-4

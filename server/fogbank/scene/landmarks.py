@@ -11,7 +11,7 @@ import numpy as np
 
 from fogbank.scene import terrain
 
-HOUSE = (-40.0, -28.0)
+HOUSE = terrain.HOUSE_SITE
 
 
 @dataclass(frozen=True)
@@ -51,6 +51,7 @@ def landmarks() -> Landmarks:
         trees.append((x, y + (6.0 if kind == "pine" else 5.5), z))
     hx, hz = HOUSE
     bx = float(terrain.river_x(terrain.ROAD_Z))
-    return Landmarks(house=(hx, float(terrain.height(hx, hz)) + 3.0, hz),
+    # the house's y is its floor, 0.1 m over its terrace (scene/meshes.py _house)
+    return Landmarks(house=(hx, float(terrain.height(hx, hz)) + 0.1, hz),
                      bridge=(bx, terrain.BRIDGE_DECK, terrain.ROAD_Z),
                      trees=tuple(trees), forest=(75.0, float(terrain.height(75, -60)) + 5, -60.0))

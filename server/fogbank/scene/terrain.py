@@ -13,6 +13,9 @@ WATER_LEVEL = 0.0
 ROAD_Z = 0.0          # the road runs along x at this z and crosses the river on the bridge
 ROAD_HALF_WIDTH = 3.0
 BRIDGE_DECK = 2.4     # height of the bridge deck
+HOUSE_SITE = (-40.0, -28.0)   # the house's centre (x, z), on a terrace cut into its slope
+HOUSE_PAD = (6.5, 5.0)        # the terrace's half sides (m): the house's 5 x 3.6 and a yard
+HOUSE_PAD_BLEND = 12.0        # m over which the terrace meets the slope
 
 
 def river_x(z):
@@ -31,10 +34,21 @@ def _raw(x, z):
 
 
 def height(x, z):
-    """Ground height at (x, z), with the road's strip levelled across its width."""
+    """Ground height at (x, z), with the road's strip levelled across its width and the
+    house's terrace levelled at the slope's height under its centre."""
     x = np.asarray(x, dtype=np.float64)
     z = np.asarray(z, dtype=np.float64)
     h = _raw(x, z)
+    # the terrace: the house stood on a slope 3 m higher on one side than the other, over a
+    # plinth 3-5 m tall (a grey block under the house in every view of it); level within
+    # HOUSE_PAD at the slope's height under its centre (cut on the uphill side, filled on
+    # the other: at its highest corner's the fill stood 9 m over the slope), blending to the
+    # slope over HOUSE_PAD_BLEND by the distance from the pad
+    hx, hz = HOUSE_SITE
+    out = np.hypot(np.maximum(np.abs(x - hx) - HOUSE_PAD[0], 0.0), np.maximum(np.abs(z - hz) - HOUSE_PAD[1], 0.0))
+    p = np.clip(1.0 - out / HOUSE_PAD_BLEND, 0.0, 1.0)
+    p = p * p * (3 - 2 * p)
+    h = h * (1 - p) + _HOUSE_PAD_Y * p
     # the road: level the ground across the strip toward the height on its centre line,
     # never below the bridge deck's ramp near the river
     road_h = _raw(x, np.full_like(z, ROAD_Z))
@@ -44,6 +58,9 @@ def height(x, z):
     w = w * w * (3 - 2 * w)
     channel = np.exp(-((x - river_x(z)) / 7.5) ** 2)
     return h * (1 - w) + (road_h * (1 - channel) + h * channel) * w
+
+
+_HOUSE_PAD_Y = float(_raw(np.float64(HOUSE_SITE[0]), np.float64(HOUSE_SITE[1])))
 
 
 def normal(x, z, eps: float = 0.05):
