@@ -463,3 +463,31 @@ def test_no_stripe_at_the_horizon(renderer, name):
     assert len(rows) > 3
     bump = lum[rows] - np.maximum(lum[rows - 4], lum[rows + 4])
     assert float(bump.max()) <= 4.0
+
+
+def test_the_house_terrace_banks_are_grass(renderer):
+    """A fresh eye saw grey smudges beside the house in every view of it: the banks of its
+    terrace (cut and filled in its slope, up to 46 degrees) took the rock colour, which
+    began at 35 degrees. From fischer-fog's camera (its fog off) the ground where it is
+    steeper than 40 degrees within 20 m of the house, by a hand-written projection of those
+    points into the frame, is green: its median green stands 10 levels over red and over
+    blue (measured 25; the rock banks: 4)."""
+    from fogbank.scene import camera as cam
+    from fogbank.scene import terrain
+    from fogbank.scene.landmarks import HOUSE
+    img, still = render(renderer, "fischer-fog", w=640, layers=[])
+    hx, hz = HOUSE
+    x, z = np.meshgrid(np.linspace(hx - 20, hx + 20, 81), np.linspace(hz - 20, hz + 20, 81))
+    steep = terrain.normal(x, z)[..., 1] < np.cos(np.radians(40.0))
+    assert steep.sum() > 50
+    view = cam.view(still.camera, still.width, still.height)
+    p = np.stack([x[steep], terrain.height(x[steep], z[steep]) + 0.05, z[steep], np.ones(steep.sum())], axis=1)
+    c = p @ view.view_proj.T
+    u = ((c[:, 0] / c[:, 3] * 0.5 + 0.5) * still.width).astype(int)
+    v = ((0.5 - c[:, 1] / c[:, 3] * 0.5) * still.height).astype(int)   # rows top first
+    ok = (u >= 0) & (u < still.width) & (v >= 0) & (v < still.height)
+    assert ok.sum() > 50
+    px = img[v[ok], u[ok]].astype(float)
+    green = px[:, 1] - np.maximum(px[:, 0], px[:, 2])
+    print(f"\nthe banks' green over red and blue: {float(np.median(green)):.1f} levels ({ok.sum()} points)")
+    assert float(np.median(green)) >= 10.0

@@ -169,7 +169,7 @@ def _presets() -> dict[str, dict[str, Any]]:
         "fischer-smoke": {
             "title": "Fischer: chimney smoke",
             "source": "Cameron Fischer, Clouds, Fog, and Smoke",
-            "description": "Smoke from 96 particles out of the house's chimney, rising warm and "
+            "description": "Smoke from 160 particles out of the house's chimney, rising warm and "
                            "spreading as it goes, bent over by the wind: dark where it is thick "
                            "(it shades itself), lit on the sun's side.",
             "params": {"camera": house_view, "time": 12.0, "wind": {"direction": 80.0, "speed": 2.5},
