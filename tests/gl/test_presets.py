@@ -398,6 +398,25 @@ def test_gawron_scatter_stays_near_the_sun(renderer):
     assert float(np.median(off)) <= 0.0
 
 
+def test_gawron_scatter_is_a_halo_round_the_sun(renderer):
+    """Two fresh eyes saw gawron-distance's orange as a vertical pillar from the frame's top
+    to the horizon: the sun sat 5 degrees under the top edge, and the glow's upper half was
+    cut off (red at the top edge 239 against 246 at the sun). The frame holds the glow above
+    the sun too: pixels 12-18 degrees from it and above it (their rays 10 degrees or more
+    higher) exist, and there red over blue has fallen 15 levels or more below its median
+    within 3-6 degrees of the sun (measured 72 -> 52)."""
+    img, still = render(renderer, "gawron-distance", w=320)
+    ang = angles_to(still, still.sun.direction())
+    elev = ray_elevations(still.camera, still.width, still.height)[::-1]   # rows top first
+    rb = img[..., 0] - img[..., 2]
+    above = (ang > 12.0) & (ang < 18.0) & (elev > still.sun.elevation + 10.0)
+    near = (ang > 3.0) & (ang < 6.0)
+    print(f"\nred - blue: near the sun {float(np.median(rb[near])):.1f}, 12-18 degrees above it "
+          f"{float(np.median(rb[above])) if above.any() else float('nan'):.1f} ({int(above.sum())} px)")
+    assert above.sum() > 50 and near.sum() > 50
+    assert float(np.median(rb[above])) <= float(np.median(rb[near])) - 15.0
+
+
 def test_the_fog_box_has_soft_faces(renderer):
     """fog-volumes: the box read as a frosted-glass slab, its faces hard. Through the
     frame's GLSL (the transmittance API), 1 m of fog 0.2 m inside its top face holds under

@@ -239,7 +239,9 @@ def _presets() -> dict[str, dict[str, Any]]:
                            "its own in the sun's direction (eqs. 5-8), its noise drifting on its own "
                            "(not with the wind) and a Gaussian blur that grows with the fog; the "
                            "sky in the fog at the horizon.",
-            "params": {"camera": view, "fog_color": "#96938c",
+            # the sun 17 degrees under the frame's top (pitch -3, fov 65): at pitch -13 it sat
+            # 5 degrees under it, and its glow, cut by the frame, read as a pillar of light
+            "params": {"camera": {**view, "pitch": -3.0, "fov": 65.0}, "fog_color": "#96938c",
                        # the sun at 10 degrees (at 9 the trees' shadows over the river bank
                        # stepped in a sawtooth); the lobe's exponent 10 keeps the orange
                        # round the sun (at 4 it washed the whole sun side peach), and its
