@@ -151,7 +151,7 @@ def test_a_skirt_reaches_below_its_neighbour_at_any_two_levels():
         k = _chunk_at(float(terrain.river_x(z)), z)
         pairs += [(k, k + 1), (k, k + side)]   # the neighbour in +x, in +z
     for a, b in pairs:
-        (ai0, ai1, aj0, aj1), (bi0, bi1, bj0, bj1) = ranges[a], ranges[b]
+        ai0, ai1, aj0, aj1 = ranges[a]
         if b == a + 1:
             border = [aj * n + ai1 for aj in range(aj0, aj1 + 1)]
         else:
