@@ -36,7 +36,7 @@ vec3 terrainAlbedo(vec3 p, vec3 n) {
     c = mix(c, vec3(0.03, 0.08, 0.10), far * smoothstep(7.5 + fw, 5.0 - fw, dx));
     // rock only beyond 50 degrees: grass holds the house's terrace banks (up to 46, cut
     // and filled in its slope, scene/terrain.py), which at 35-45 degrees read as grey
-    // smudges; the hills never pass 31
+    // smudges; the hills never pass 35
     c = mix(c, vec3(0.26, 0.25, 0.23), smoothstep(0.64, 0.55, n.y));
     // road edge antialiased over one screen pixel
     float e = abs(p.z - ROAD_Z) - ROAD_HALF_WIDTH;
