@@ -345,10 +345,10 @@ def test_the_terrain_at_one_level_tiles_the_plane_without_a_crack(level):
 
 def test_the_house_stands_on_a_terrace_not_a_plinth():
     """A fresh eye saw a grey block under the house in every view of it: on its slope the
-    ground under its walls fell 3 m from one side to the other, and the plinth under the
-    walls stood 3.1 m (plus 0.4 m sunk) out of the lowest. The ground under its footprint
-    and a metre round it now lies within 5 cm of one level (the terrace), and its plinth is
-    0.5 m from bottom to top."""
+    ground under its corners fell 5.1 m from one to another (6.1 m over its footprint and a
+    metre round it), and the plinth stood 5.2 m (plus 0.4 m sunk) out of the lowest. The
+    ground under its footprint and a metre round it now lies within 5 cm of one level (the
+    terrace), and its plinth is 0.5 m from bottom to top."""
     from fogbank.scene import terrain
     from fogbank.scene.landmarks import HOUSE
     from fogbank.scene.meshes import _house

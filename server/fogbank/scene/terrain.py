@@ -39,8 +39,8 @@ def height(x, z):
     x = np.asarray(x, dtype=np.float64)
     z = np.asarray(z, dtype=np.float64)
     h = _raw(x, z)
-    # the terrace: the house stood on a slope 3 m higher on one side than the other, over a
-    # plinth 3-5 m tall (a grey block under the house in every view of it); level within
+    # the terrace: the house stood on a slope 5 m higher on one side than the other, over a
+    # plinth 5.6 m tall (a grey block under the house in every view of it); level within
     # HOUSE_PAD at the slope's height under its centre (cut on the uphill side, filled on
     # the other: at its highest corner's the fill stood 9 m over the slope), blending to the
     # slope over HOUSE_PAD_BLEND by the distance from the pad
