@@ -199,6 +199,16 @@ def angles_to(still, direction):
     return np.degrees(np.arccos(np.clip(rays @ np.asarray(direction), -1, 1))).reshape(h, w)
 
 
+def pixels_of(camera, w, h, points):
+    """Where world points (N, 3) fall in a w x h frame: (column, row counted from the
+    bottom, as the fog target's rows), floats, by the camera's view-projection and the
+    perspective divide written out here."""
+    from fogbank.scene import camera as cam
+    p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    c = np.c_[p, np.ones(len(p))] @ cam.view(camera, w, h).view_proj.T
+    return (c[:, 0] / c[:, 3] * 0.5 + 0.5) * w, (c[:, 1] / c[:, 3] * 0.5 + 0.5) * h
+
+
 @pytest.mark.parametrize("name", ["default", "gawron-distance", "shaded-valley", "forest-shafts"])
 def test_the_sun_is_no_clipped_patch(renderer, name):
     """The default look's sun was a flat clipped patch: 3.2% of the frame at 255 (a 190 x
@@ -237,17 +247,10 @@ def test_biri_fig7_the_house_is_clear_in_the_middle_misty_at_its_ends_and_the_wa
     from fogbank.scene.landmarks import landmarks
     hx, hy, hz = landmarks().house
     still = preset_still("biri-fig7", width=320, height=180)
-    v = still.camera
 
     def t_at(T, points):
-        from fogbank.scene import camera as cam
-        view = cam.view(v, T.shape[1], T.shape[0])
-        out = []
-        for p in points:
-            c = view.view_proj @ np.array([*p, 1.0])
-            x, y = (c[:2] / c[3] * 0.5 + 0.5) * [T.shape[1], T.shape[0]]
-            out.append(float(T[int(y), int(x)]))
-        return np.array(out)
+        x, y = pixels_of(still.camera, T.shape[1], T.shape[0], points)
+        return T[y.astype(int), x.astype(int)].astype(np.float64)
     wall = [(hx + dx, hy + 2.5, hz + 3.62) for dx in (0.0, -4.3, 4.3)]
     _, T0, _, _ = fog_only(renderer, still)
     mid, left, right = t_at(T0, wall)
@@ -266,17 +269,13 @@ def test_fischer_smoke_leaves_the_chimney(renderer):
     1 m above the chimney's top, by a hand-written projection of those points, hold smoke
     (T < 0.5) at every second from 12 to 16 s."""
     from fogbank.model.presets import _house_chimney
-    from fogbank.scene import camera as cam
     cx, cy, cz = _house_chimney()
     still = preset_still("fischer-smoke", width=320, height=180)
-    view = cam.view(still.camera, 320, 180)
+    # the chimney's top is cy + 0.4 (scene/meshes.py _house)
+    x, y = pixels_of(still.camera, 320, 180, [(cx, cy + up, cz) for up in (0.45, 0.9, 1.4)])
     for t in (12.0, 13.0, 14.0, 15.0, 16.0):
         _, T, _, _ = fog_only(renderer, still.model_copy(update={"time": t}))
-        ts = []
-        for up in (0.45, 0.9, 1.4):   # the chimney's top is cy + 0.4 (scene/meshes.py _house)
-            c = view.view_proj @ np.array([cx, cy + up, cz, 1.0])
-            x, y = (c[:2] / c[3] * 0.5 + 0.5) * [T.shape[1], T.shape[0]]
-            ts.append(float(T[int(y), int(x)]))
+        ts = T[y.astype(int), x.astype(int)].astype(np.float64)
         print(f"\nt {t}: T above the chimney {np.round(ts, 3)}")
         assert max(ts) < 0.5
 
@@ -349,15 +348,12 @@ def test_the_clearing_is_carved_inside_standing_fog(renderer):
     Now the house's texels keep the fog in front of them (T <= 0.9), and are clearer than
     ground at the same distance beside the clearing: at least 4 times its T, a pocket of
     clear air that shows (seen from 24 m up at the fog's level it was 2.2 times, 0.215
-    against 0.096, and a fresh eye saw no clearing; from above the fog, 0.479 against 0.051)."""
+    against 0.096, and a fresh eye saw no clearing; from above the fog, 0.412 against 0.049)."""
     from fogbank.scene.landmarks import landmarks
-    from fogbank.scene import camera as cam
     hx, hy, hz = landmarks().house
     still = preset_still("carved-clearing", width=320, height=180)
     _, T, invd, _ = fog_only(renderer, still)
-    view = cam.view(still.camera, T.shape[1], T.shape[0])
-    c = view.view_proj @ np.array([hx, hy + 2.0, hz + 3.7, 1.0])
-    x, y = (c[:2] / c[3] * 0.5 + 0.5) * [T.shape[1], T.shape[0]]
+    (x,), (y,) = pixels_of(still.camera, T.shape[1], T.shape[0], [(hx, hy + 2.0, hz + 3.7)])
     house = float(T[int(y), int(x)])
     d_house = 1.0 / float(invd[int(y), int(x)])
     assert house <= 0.9
@@ -492,7 +488,6 @@ def test_the_house_terrace_banks_are_grass(renderer):
     steeper than 40 degrees within 20 m of the house, by a hand-written projection of those
     points into the frame, is green: its median green stands 10 levels over red and over
     blue (measured 25; the rock banks: 4)."""
-    from fogbank.scene import camera as cam
     from fogbank.scene import terrain
     from fogbank.scene.landmarks import HOUSE
     img, still = render(renderer, "fischer-fog", w=640, layers=[])
@@ -500,11 +495,9 @@ def test_the_house_terrace_banks_are_grass(renderer):
     x, z = np.meshgrid(np.linspace(hx - 20, hx + 20, 81), np.linspace(hz - 20, hz + 20, 81))
     steep = terrain.normal(x, z)[..., 1] < np.cos(np.radians(40.0))
     assert steep.sum() > 50
-    view = cam.view(still.camera, still.width, still.height)
-    p = np.stack([x[steep], terrain.height(x[steep], z[steep]) + 0.05, z[steep], np.ones(steep.sum())], axis=1)
-    c = p @ view.view_proj.T
-    u = ((c[:, 0] / c[:, 3] * 0.5 + 0.5) * still.width).astype(int)
-    v = ((0.5 - c[:, 1] / c[:, 3] * 0.5) * still.height).astype(int)   # rows top first
+    p = np.stack([x[steep], terrain.height(x[steep], z[steep]) + 0.05, z[steep]], axis=1)
+    u, up = pixels_of(still.camera, still.width, still.height, p)
+    u, v = u.astype(int), (still.height - up).astype(int)   # rows top first
     ok = (u >= 0) & (u < still.width) & (v >= 0) & (v < still.height)
     assert ok.sum() > 50
     px = img[v[ok], u[ok]].astype(float)

@@ -35,7 +35,7 @@ def tree_spots() -> list[tuple[float, float, str]]:
             x, z = rng.uniform(-190, 190), rng.uniform(-190, 120)
         if abs(x - float(terrain.river_x(z))) < 14 or abs(z - terrain.ROAD_Z) < 8:
             continue
-        if abs(x + 40) < 12 and abs(z + 28) < 11:  # the house
+        if abs(x - HOUSE[0]) < 12 and abs(z - HOUSE[1]) < 11:  # the house
             continue
         if any((x - sx) ** 2 + (z - sz) ** 2 < 20 for sx, sz, _ in spots):
             continue
