@@ -121,6 +121,7 @@ class Frame:
     scene_cached: bool = False
     draft: bool = False            # a preview (a user drags): cheaper light (passes/light.py)
     coarse_shadow: bool = False    # lit by the preview shadow map (Renderer.begin)
+    warp: Any = None               # the scene pass warped from an earlier preview's (render/reproject.py Warp)
     shadow: Any = None             # the shadow map it is lit by (render/resources.py ShadowMap; the shadow pass)
     light: Any = None              # the light grid its fog is lit by (passes/light.py LightGrid), if any
     held_fog: Any = None           # the held fog this frame's fog was drawn over (render/targets.py HeldFog)

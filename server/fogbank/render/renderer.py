@@ -18,6 +18,7 @@ import numpy as np
 from fogbank.render.frame import Frame, Simulations, plan_fog
 from fogbank.render.gl import create_context  # noqa: F401  (the worker's entry point)
 from fogbank.render.passes import FRAME_PASSES
+from fogbank.render import reproject
 from fogbank.render.programs import Programs
 from fogbank.render.rays import RayCaster
 from fogbank.render.passes.shadow import sun_key
@@ -45,6 +46,9 @@ class Renderer:
         # whether the latest frame's scene pass was the cached one (begin): a stream's
         # session learns from it that the cache let its scene pass go (stream/session.py)
         self.scene_reused = False
+        # whether it warped an earlier preview's scene pass (render/reproject.py): its cost
+        # says little of what the look costs (stream/session.py does not calibrate by it)
+        self.scene_warped = False
         self.sims = Simulations()
         self.rays = RayCaster(self)
         self._prep = ThreadPoolExecutor(1, thread_name_prefix="fog-plan")
@@ -70,11 +74,18 @@ class Renderer:
         cached = (old is not None and old[:3] == key[:3] and (old[3] or not msaa) and (draft or not old[4]))
         g.last_frame = "reused" if cached else ("new" if g.scene_key is None else "redrawn")
         self.scene_reused = cached
+        # a preview that only turned the camera since the base preview warps its scene pass
+        warp = None
+        if not cached and draft and not msaa:
+            src = self.caches.warp_source(slot, still.effects.sun_through_fog, reproject.warp_key(still, coarse))
+            if src is not None:
+                warp = reproject.plan(src.warp_view, view, w, h, src.warp_base)
+        self.scene_warped = warp is not None
         # the plan's split (FogPlan.split) is what asks the fog pass to hold
         plan = self._prep.submit(plan_fog, still, still.time, view.eye, self.sims, hold_fog and cached, True)
         return Frame(still=still, slot=slot, msaa=msaa, view=view,
                      targets=self.caches.targets(w, h), gbuffer=g, plan=plan,
-                     scene_key=key, scene_cached=cached, draft=draft, coarse_shadow=coarse)
+                     scene_key=key, scene_cached=cached, draft=draft, coarse_shadow=coarse, warp=warp)
 
     def render(self, still, slot: str = "still", msaa: bool = True, hold_fog: bool = False,
                draft: bool = False, lend: bool = False, channels: int = 3) -> np.ndarray:

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import moderngl
 import numpy as np
@@ -370,6 +371,33 @@ class GBuffer:
     held_light: moderngl.Framebuffer | None = None
     held_light_key: object = None
     light_seen: object = None
+    # a preview's scene pass drawn whole, which later previews that only turn the camera
+    # warp (render/reproject.py): copies of colour, inverse distance (and sunlight), the
+    # view it was drawn from, and what else it depends on (Renderer.begin warp_key)
+    warp_base: moderngl.Framebuffer | None = None
+    warp_view: object = None
+    warp_key: object = None
+    warp_serial: int = 0           # when it was kept (TargetCache.warp_source: the latest serves)
+
+    def keep_warp_base(self, ctx: moderngl.Context, view, key) -> None:
+        """Copy the scene pass just drawn whole into the warp base (a preview's, one sample)."""
+        if self.warp_base is None:
+            def like(t: moderngl.Texture) -> moderngl.Texture:
+                c = ctx.texture(t.size, t.components, dtype=t.dtype)
+                c.repeat_x = c.repeat_y = False
+                c.filter = (moderngl.NEAREST, moderngl.NEAREST) if t is self.invdist else (moderngl.LINEAR,) * 2
+                return c
+            self.warp_base = ctx.framebuffer(color_attachments=[like(t) for t in self.fbo.color_attachments])
+        ctx.copy_framebuffer(self.warp_base, self.fbo)
+        self.warp_view, self.warp_key = view, key
+        GBuffer.kept += 1
+        self.warp_serial = GBuffer.kept
+
+    kept: ClassVar[int] = 0   # warp bases kept so far, in this process
+
+    def drop_warp_base(self) -> None:
+        release_fbo(self.warp_base)
+        self.warp_base = self.warp_view = self.warp_key = None
 
     def held_fog(self, ctx: moderngl.Context, scale: int, direct: bool, whole: bool = False) -> HeldFog:
         """The held fog's targets at `scale` with a tauDirect target (`direct`), made anew
@@ -408,6 +436,8 @@ class GBuffer:
             n += self.tile_list.width * self.tile_list.height * 8
         if self.held_light is not None:
             n += self.held_light.width * self.held_light.height * HELD_LIGHT_BPS
+        if self.warp_base is not None:   # colour RGBA16F, inverse distance R32F (sunlight RGBA16F)
+            n += self.color.width * self.color.height * (8 + 4 + (SUNLIGHT_BPP if self.sunlight else 0))
         return n + sum(h.nbytes() for h in self.held.values())
 
     @property
@@ -462,6 +492,7 @@ class GBuffer:
 
     def release(self) -> None:
         self.drop_held()
+        self.drop_warp_base()
         release_fbo(self.tiles_fbo)
         if self.tile_list is not None:
             self.tile_list.release()
@@ -568,6 +599,19 @@ class TargetCache:
 
     def nbytes(self) -> int:
         return self._targets.nbytes() + self._gbuffers.nbytes()
+
+    def warp_source(self, slot: str, sunlight: bool, key) -> GBuffer | None:
+        """The slot's scene pass whose warp base was kept last with this key
+        (render/reproject.py warp_key), at any size: a preview warps from it whatever its
+        own size (the drag's ladder changes the previews' size, stream/session.py, and a
+        first preview at a new size would otherwise draw its pass whole)."""
+        best = None
+        for k in self._gbuffers.keys():
+            if k[0] == slot and k[3] == sunlight:
+                g = self._gbuffers.peek(k)
+                if g.warp_key == key and (best is None or g.warp_serial > best.warp_serial):
+                    best = g
+        return best
 
     def clear(self) -> None:
         self.park()

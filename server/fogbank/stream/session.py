@@ -599,7 +599,7 @@ class Session:
         self.dirty = False
 
     def measured(self, job: FrameJob, render_ms: float, now: float, once: bool = False,
-                 scene_reused: bool | None = None) -> None:
+                 scene_reused: bool | None = None, scene_warped: bool = False) -> None:
         """A frame's render time. Previews climb PREVIEW_RUNGS by what they cost: a
         preview over its budget (preview_budget) makes the next one a rung lower; one well
         under it (a fifth to spare) a rung higher, unless that rung was measured over the
@@ -616,7 +616,11 @@ class Session:
         whose estimate took the other case calibrates nothing: several 1280x720 streams on
         one worker, two of whose scene passes fit, had the others' full frames estimated at
         25 ms, measured at 230 (the scene pass with MSAA), calibrated 9x over and kept with
-        MSAA; estimated with their scene pass they are drawn without MSAA (80 ms)."""
+        MSAA; estimated with their scene pass they are drawn without MSAA (80 ms). A preview
+        whose scene pass the worker warped from an earlier one (`scene_warped`,
+        render/reproject.py) is its rung's cost, but calibrates nothing: the model prices a
+        scene pass drawn whole, and a ratio taken from the cheaper warp would price the
+        refinement, whose scene pass is drawn whole, too low."""
         surprised = False
         if scene_reused is not None:
             size = (job.still.width, job.still.height)
@@ -631,7 +635,7 @@ class Session:
             return
         self.last_ms = render_ms
         self.last_level = job.level if job.full else None
-        if job.estimate_ms > 0 and not surprised:   # raw estimate: measured / estimated, smoothed
+        if job.estimate_ms > 0 and not surprised and not scene_warped:   # raw estimate: measured / estimated, smoothed
             r = min(max(render_ms / job.estimate_ms, 0.05), 20.0)
             # the first measurement replaces the prior: smoothed with 1.0, a look the model
             # underestimates twice over was still underestimated by 1.4 on the next frame

@@ -219,7 +219,7 @@ class Streamer:
                 self.wake()
             render_ms, encode_ms = out["render_ms"], out["encode_ms"]
             s.measured(job, render_ms, self.clock(), once=bool(out.get("once")),
-                       scene_reused=out.get("scene_reused"))
+                       scene_reused=out.get("scene_reused"), scene_warped=bool(out.get("scene_warped")))
             metrics.RENDER_MS.observe(render_ms)
             metrics.ENCODE_MS.observe(encode_ms)
             flags = ((FLAG_FULL if job.full else 0) | (FLAG_PLAYING if job.playing else 0)

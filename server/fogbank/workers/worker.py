@@ -200,11 +200,11 @@ def frame(still, slot: str, msaa: bool, quality: int, show: str = "shaded", laye
 
     def fn(r):
         t0 = time.perf_counter()
-        stats, reused = None, None
+        stats, reused, warped = None, None, False
         work = (r.programs.compiled, r.noise.baked, r.shadows.new_suns)
         if show == "shaded":
             img = r.render(still, slot=slot, msaa=msaa, hold_fog=hold_fog, draft=draft, lend=True, channels=4)
-            reused = r.scene_reused
+            reused, warped = r.scene_reused, r.scene_warped
         else:
             img, stats = teach.render(r, still, show, layer, slot=slot)
         t1 = time.perf_counter()
@@ -217,7 +217,9 @@ def frame(still, slot: str, msaa: bool, quality: int, show: str = "shaded", laye
                 # suns whose maps evict each other: resources.SUNS_SEEN)
                 "once": (r.programs.compiled, r.noise.baked, r.shadows.new_suns) != work,
                 # whether it drew over the cached scene pass (None: a view that teaches)
-                "scene_reused": reused}
+                "scene_reused": reused,
+                # whether it warped an earlier preview's (render/reproject.py)
+                "scene_warped": warped}
     return _run(fn)
 
 

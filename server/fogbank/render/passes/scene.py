@@ -11,6 +11,7 @@ import numpy as np
 from fogbank.render.gl import TEX, set_uniforms
 from fogbank.render.passes.base import Pass
 from fogbank.render.passes.sky import scene_target, sun_color
+from fogbank.render.programs import FULLSCREEN
 from fogbank.scene import camera as cam
 from fogbank.scene import terrain
 
@@ -54,7 +55,7 @@ def merged_ranges(first: np.ndarray, count: np.ndarray) -> list[tuple[int, int]]
 
 class ScenePass(Pass):
     name = "scene"
-    reads = ("meshes", "shadow_map", "lightmap", "view")
+    reads = ("meshes", "shadow_map", "lightmap", "view", "gbuffer.warp_base")
     writes = ("scene_target", "gbuffer.held")
 
     def run(self, r, f) -> None:
@@ -63,11 +64,25 @@ class ScenePass(Pass):
         if f.gbuffer.held:   # a fog held over the scene pass drawn before goes with it
             r.caches.park()   # never release the bound framebuffer's attachments
             f.gbuffer.drop_held()
-        look, view = f.still, f.view
-        mesh = r.meshes.get(look.scene)
         target = scene_target(f)
         target.use()
-        target.clear(0.0, 0.0, 0.0, 1.0, depth=1.0)
+        if f.warp is None:
+            target.clear(0.0, 0.0, 0.0, 1.0, depth=1.0)
+            self._draw(r, f, [f.view.view_proj])
+        else:   # an earlier preview's pass along the new rays, then what it did not see
+            self._warp(r, f)
+            if f.warp.rects:   # one draw, culled to the rectangles: the warp's depths mask the rest
+                self._draw(r, f, [cull for _, cull in f.warp.rects])
+        f.gbuffer.scene_key = f.scene_key
+
+    @staticmethod
+    def _draw(r, f, culls: list[np.ndarray]) -> None:
+        """The terrain and the objects that any of `culls` (view-projections) may see, into
+        the bound scene target."""
+        def in_view(centres, radii):
+            return np.logical_or.reduce([cam.spheres_in_view(c, centres, radii) for c in culls])
+        look, view = f.still, f.view
+        mesh = r.meshes.get(look.scene)
         ctx = r.ctx
         ctx.enable(moderngl.DEPTH_TEST)
         ctx.disable(moderngl.CULL_FACE)
@@ -81,7 +96,7 @@ class ScenePass(Pass):
             set_uniforms(r.terrain_prog, {**common, "uLightmapRect": f.shadow.lightmap_rect})
             f.shadow.lightmap.use(TEX["uLightmap"])
             chunks = mesh.chunks
-            keep = np.flatnonzero(cam.spheres_in_view(view.view_proj, chunks[:, 2:5], chunks[:, 5]))
+            keep = np.flatnonzero(in_view(chunks[:, 2:5], chunks[:, 5]))
             dist = np.linalg.norm(chunks[keep, 2:5] - view.eye, axis=1)
             if view.eye[1] < float(terrain.height(view.eye[0], view.eye[2])):
                 # an eye below the ground sees the terrain's underside, and the skirts
@@ -103,7 +118,7 @@ class ScenePass(Pass):
             if mesh.far_blocks is not None and len(mesh.far_blocks):
                 # the far land's blocks in view, consecutive ones as one draw
                 blocks = mesh.far_blocks
-                seen = cam.spheres_in_view(view.view_proj, blocks[:, 2:5], blocks[:, 5])
+                seen = in_view(blocks[:, 2:5], blocks[:, 5])
                 for first, count in merged_ranges(blocks[seen, 0], blocks[seen, 1]):
                     mesh.terrain.render(moderngl.TRIANGLES, vertices=count, first=first)
             elif mesh.far[1]:
@@ -120,7 +135,7 @@ class ScenePass(Pass):
             # first, each group coarse where its coarse trees' largest gap to the full ones
             # is within LOD_ERROR_PX at its nearest point (scene/meshes.py TREE_SIDES)
             mesh.objects.render(moderngl.TRIANGLES, vertices=int(groups[0, 0]), first=0)
-            keep = np.flatnonzero(cam.spheres_in_view(view.view_proj, groups[:, 2:5], groups[:, 5]))
+            keep = np.flatnonzero(in_view(groups[:, 2:5], groups[:, 5]))
             dist = np.linalg.norm(groups[keep, 2:5] - view.eye, axis=1)
             errors = np.stack([np.zeros(len(keep)), groups[keep, 8]], axis=1)
             level = lod_levels(dist - groups[keep, 5], errors, look.camera.fov, look.height)
@@ -128,4 +143,19 @@ class ScenePass(Pass):
                 row = groups[keep[k]]
                 first, count = (row[0], row[1]) if level[k] == 0 else (row[6], row[7])
                 mesh.objects.render(moderngl.TRIANGLES, vertices=int(count), first=int(first))
-        f.gbuffer.scene_key = f.scene_key
+
+    @staticmethod
+    def _warp(r, f) -> None:
+        """Every pixel of the frame from the warp base along its new ray (passes/warp.frag),
+        and its depth the mask of what is drawn anew: 0 where the base saw it, else 1."""
+        g, v, b = f.gbuffer, f.view, f.warp.base
+        prog = r.programs.get(FULLSCREEN, "passes/warp.frag", SUN_LIGHT=int(g.sunlight is not None))
+        set_uniforms(prog, {"uFwd": v.fwd, "uRight": v.right, "uUp": v.up,
+                            "uBaseFwd": b.fwd, "uBaseRight": b.right, "uBaseUp": b.up})
+        for name, tex in zip(("uBaseColor", "uBaseInvDist", "uBaseSunLight"), f.warp.source.color_attachments):
+            tex.use(TEX[name])
+        ctx = r.ctx
+        ctx.enable(moderngl.DEPTH_TEST)
+        ctx.depth_func = "1"   # always: every pixel's depth is the warp's mask
+        r.programs.draw(prog, moderngl.TRIANGLES)
+        ctx.depth_func = "<"

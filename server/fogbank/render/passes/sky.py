@@ -2,7 +2,9 @@
 target (MSAA or the G-buffer), with the sun's disc and glow (common/sky.glsl). Drawn
 after the scene with the depth test, so it shades only the pixels (samples) that no
 surface covers: drawn first, it shaded every pixel of the frame and the terrain then
-painted over most of them (20 of 190 ms at 1280x720 on llvmpipe)."""
+painted over most of them (20 of 190 ms at 1280x720 on llvmpipe). A preview's scene
+pass, drawn whole with its sky, is kept as the base that the next previews warp while
+the camera only turns (render/reproject.py)."""
 
 from __future__ import annotations
 
@@ -10,6 +12,7 @@ import moderngl
 import numpy as np
 
 from fogbank.model.fields import srgb_to_linear
+from fogbank.render import reproject
 from fogbank.render.gl import set_uniforms
 from fogbank.render.passes.base import Pass
 from fogbank.scene.meshes import CALIBRATION_SKY
@@ -28,7 +31,7 @@ def sun_color(look) -> np.ndarray:
 class SkyPass(Pass):
     name = "sky"
     reads = ("look.sun", "view", "scene_target")
-    writes = ("scene_target",)
+    writes = ("scene_target", "gbuffer.warp_base")
 
     def run(self, r, f) -> None:
         if f.scene_cached:
@@ -42,6 +45,9 @@ class SkyPass(Pass):
             "uFwd": v.fwd, "uRight": v.right, "uUp": v.up, "uSunDir": look.sun.direction(),
             "uSunColor": sun_color(look), "uFlatSky": look.scene == "calibration",
             "uFlatSkyColor": np.array(srgb_to_linear(CALIBRATION_SKY))})
-        r.programs.draw(r.sky_prog, moderngl.TRIANGLES)
+        if f.warp is None or f.warp.rects:   # a warp's depths leave it the pixels drawn anew
+            r.programs.draw(r.sky_prog, moderngl.TRIANGLES)
         ctx.depth_func = "<"
         ctx.disable(moderngl.DEPTH_TEST)
+        if f.warp is None and not f.msaa and f.draft:   # a preview's pass drawn whole: what the next ones warp
+            f.gbuffer.keep_warp_base(ctx, v, reproject.warp_key(look, f.coarse_shadow))
