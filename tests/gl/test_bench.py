@@ -62,6 +62,31 @@ def test_the_lit_cost_is_reported_with_its_rounds_and_ratio():
     assert "| before (/tmp/old/server) | 50.0 | 50.0 | - |" in md
 
 
+def test_a_drags_preview_cost_is_reported_with_its_rounds_and_ratio():
+    from fogbank.tools.bench import preview_markdown
+    prev = {"640x360 now": {"ms": 46.0, "rounds": [46.0, 47.5], "vs_before": 0.68},
+            "640x360 before": {"ms": 68.0, "rounds": [68.0, 66.0], "tree": "/tmp/old/server"}}
+    md = "\n".join(preview_markdown(prev))
+    assert "| 640x360 now | 46.0 | 46.0, 47.5 | 0.68x |" in md
+    assert "| 640x360 before (/tmp/old/server) | 68.0 | 68.0, 66.0 | - |" in md
+
+
+def test_a_drags_preview_probe_runs_alone_in_a_fresh_process():
+    """preview_cost ships preview_orbit's source to a fresh process (an earlier checkout's
+    bench has none): it runs there with nothing of this module."""
+    import inspect
+    import json
+    import subprocess
+    import sys
+
+    from fogbank.tools import bench
+    probe = bench._PREVIEW_PROBE.format(source=inspect.getsource(bench.preview_orbit))
+    assert "fogbank.tools.bench" not in probe
+    out = subprocess.run([sys.executable, "-c", probe, "160", "90"], capture_output=True, text=True,
+                         timeout=300, check=True).stdout
+    assert 0 < float(json.loads(out.strip().splitlines()[-1])) < 5000
+
+
 def test_process_boundary_is_measured_through_real_workers():
     from fogbank.tools.bench import process_boundary
     pb = process_boundary(n=20)

@@ -8,6 +8,7 @@ comparison is a ratio of two things timed in the same run.
 from __future__ import annotations
 
 import asyncio
+import inspect
 import json
 import os
 import platform
@@ -356,6 +357,79 @@ def lit_cost(before_tree: str | None, rounds: int = 3, n: int = 7) -> dict:
     return out
 
 
+def preview_orbit(w: int, h: int, frames: int = 40, step: float = 2.0) -> float:
+    """Median ms of a drag's preview of the default look as a stream's worker draws it
+    (draft, no MSAA, fog scale 4, time running; render alone, the JPEG not included) while
+    the camera turns `step` degrees of heading a frame: the page's left-drag. This code
+    warps the previews' scene pass (render/reproject.py); earlier code draws it whole.
+    Runs in other checkouts too (preview_cost ships its source): it calls only what they
+    have."""
+    from fogbank.model.presets import merge
+    r = Renderer(create_context())
+    base = P.preset_dict("default")
+    times = []
+    for i in range(frames):
+        cam = {**base["camera"], "yaw": base["camera"]["yaw"] + i * step}
+        s = StillParams.model_validate(merge(base, {"camera": cam, "time": 1.0 + i / 24, "width": w, "height": h,
+                                                    "effects": {"fog_scale": 4}}))
+        t0 = time.perf_counter()
+        r.render(s, slot="bench-drag", msaa=False, draft=True, lend=True, channels=4)
+        times.append((time.perf_counter() - t0) * 1000)
+    return statistics.median(times[5:])
+
+
+PREVIEW_SIZES = ((640, 360), (448, 252))
+# preview_orbit's own source, run in a fresh process of this code or of an earlier checkout
+# (whose bench has no preview_orbit)
+_PREVIEW_PROBE = "\n".join([
+    "import json, statistics, sys, time",
+    "from fogbank.model import presets as P",
+    "from fogbank.model.params import StillParams",
+    "from fogbank.render.renderer import Renderer, create_context",
+    "{source}",
+    "print(json.dumps(preview_orbit(int(sys.argv[1]), int(sys.argv[2]))))"])
+
+
+def preview_cost(before_tree: str | None, rounds: int = 3) -> dict:
+    """A drag's preview frame (preview_orbit) at PREVIEW_SIZES, each a fresh process, this
+    code and with `before_tree` the earlier code's in turn (the order turned every round),
+    median of `rounds` rounds."""
+    runs: dict[str, list[float]] = {}
+    jobs = [(f"{w}x{h}", w, h, which) for w, h in PREVIEW_SIZES for which in (("now", "before") if before_tree else ("now",))]
+    for i in range(rounds):
+        for label, w, h, which in (jobs if i % 2 == 0 else jobs[::-1]):
+            env = {**os.environ, **(_tree_env(before_tree) if which == "before" else {})}
+            probe = _PREVIEW_PROBE.format(source=inspect.getsource(preview_orbit))
+            out = subprocess.run([sys.executable, "-c", probe, str(w), str(h)], env=env,
+                                 capture_output=True, text=True, timeout=900, check=True).stdout
+            ms = float(json.loads(out.strip().splitlines()[-1]))
+            runs.setdefault(f"{label} {which}", []).append(ms)
+            print(f"  round {i + 1} preview {label} {which:6s} {ms:7.1f} ms")
+    out = {k: {"ms": statistics.median(v), "rounds": v} for k, v in runs.items()}
+    if before_tree:
+        for w, h in PREVIEW_SIZES:
+            out[f"{w}x{h} now"]["vs_before"] = out[f"{w}x{h} now"]["ms"] / out[f"{w}x{h} before"]["ms"]
+            out[f"{w}x{h} before"]["tree"] = before_tree
+    return out
+
+
+def preview_markdown(prev: dict) -> list[str]:
+    """A drag's preview frame, against the earlier code."""
+    L = ["## A drag's preview (issue 32)", "",
+         "The default look's preview as a stream's worker draws it while the page's left-drag "
+         "turns the camera 2 degrees a frame (draft, no MSAA, fog scale 4, time running; render "
+         "alone), 40 frames, median of the last 35; each size and code a fresh process, in turn "
+         "in each round, median of the rounds (ms). This code warps the previews' scene pass "
+         "while the camera only turns (render/reproject.py).", "",
+         "| size, code | ms | rounds | vs before |", "|---|---|---|---|"]
+    for label, row in prev.items():
+        ratio = f"{row['vs_before']:.2f}x" if "vs_before" in row else "-"
+        rounds = ", ".join(f"{v:.1f}" for v in row["rounds"])
+        name = f"{label} ({row['tree']})" if "tree" in row else label
+        L.append(f"| {name} | {row['ms']:.1f} | {rounds} | {ratio} |")
+    return L + [""]
+
+
 def workers_scaling(seconds: float, clients: int = 4) -> list[dict]:
     """Aggregate fps of `clients` streams at 640x360 against 1 and 2 render workers, and 4
     where this process may run on 8 cores or more (each worker is a process with its own
@@ -445,6 +519,8 @@ def targets(r: Renderer, seconds: float, analytic: list[dict], rounds: int = 3,
     print("    720p still camera by pass: " + ", ".join(f"{k} {v:.1f}" for k, v in out["where_720p_still"].items()))
     print("  the still camera's 720p frame by light (issue 32), each in a fresh process, in turn")
     out["lit_cost"] = lit_cost(before_tree, rounds=rounds)
+    print("  a drag's preview frames (issue 32), each in a fresh process, in turn")
+    out["preview_cost"] = preview_cost(before_tree, rounds=rounds)
     version = bench_vtk.available()
     if version:
         vt = [bench_vtk.orbit(w, h) for w, h in ((1280, 720), (640, 360))]
@@ -631,13 +707,14 @@ def run(out_dir: str = "docs", quick: bool = False, only_targets: bool = False,
     if only_lit:   # issue 32's figure alone: the lit frame's cost, before and after in one run
         res = {"command": " ".join(["fogbank"] + sys.argv[1:]), "cpu": _cpu(),
                "date": time.strftime("%Y-%m-%d %H:%M:%S %Z"),
-               "lit_cost": lit_cost(before_tree, rounds=1 if quick else 5)}
+               "lit_cost": lit_cost(before_tree, rounds=1 if quick else 5),
+               "preview_cost": preview_cost(before_tree, rounds=1 if quick else 3)}
         print(json.dumps(res["lit_cost"]))
         Path(out_dir).mkdir(parents=True, exist_ok=True)
         Path(out_dir, "bench-lit.json").write_text(json.dumps(res, indent=1))
         Path(out_dir, "bench-lit.md").write_text("\n".join(
             ["# fogbank benchmark: lit fog's cost", "", f"`{res['command']}` on {res['cpu']}, {res['date']}.", ""]
-            + lit_markdown(res["lit_cost"])))
+            + lit_markdown(res["lit_cost"]) + preview_markdown(res["preview_cost"])))
         print(f"wrote {out_dir}/bench-lit.json and bench-lit.md")
         return res
     earlier = json.loads(Path(before).read_text()) if before else None   # read first: fail fast
@@ -817,6 +894,8 @@ def markdown(res: dict) -> str:
         L += targets_markdown(res)
     if "lit_cost" in res.get("targets", {}):
         L += lit_markdown(res["targets"]["lit_cost"])
+    if "preview_cost" in res.get("targets", {}):
+        L += preview_markdown(res["targets"]["preview_cost"])
     L += [
          "## 1. Analytic fog against raymarching", "",
          "Fog pass alone at 1280x720, one layer of each exponential kind (from the presets), "
