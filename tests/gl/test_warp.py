@@ -14,8 +14,8 @@ from fogbank.model.presets import preset_dict
 W, H = 320, 180
 
 
-def _look(yaw_turn: float, pitch_turn: float = 0.0, size: tuple[int, int] = (W, H)) -> StillParams:
-    d = {**preset_dict("default"), "width": size[0], "height": size[1], "time": 1.0}
+def _look(yaw_turn: float, pitch_turn: float = 0.0, size: tuple[int, int] = (W, H), density: float = 1.0) -> StillParams:
+    d = {**preset_dict("default"), "width": size[0], "height": size[1], "time": 1.0, "density": density}
     d["camera"] = {**d["camera"], "yaw": d["camera"]["yaw"] + yaw_turn, "pitch": d["camera"]["pitch"] + pitch_turn}
     d["effects"] = {**d["effects"], "fog_scale": 4}
     return StillParams.model_validate(d)
@@ -54,13 +54,15 @@ def _by_hand(base_view, view, size: tuple[int, int] = (W, H), base_size: tuple[i
                                        ((-2.0, 0.0), (224, 126))])
 def test_a_turned_preview_is_its_base_along_the_new_rays(renderer, turn, size):
     from fogbank.scene import camera as cam
-    base, turned = _look(0.0), _look(*turn, size=size)
+    # another density: the same scene pass, but not the same finished frame, which a preview
+    # of the same look warps instead (test_a_turned_previews_frame_...)
+    base, turned = _look(0.0), _look(*turn, size=size, density=1.1)
     slot = f"warp-test-{turn}"
     renderer.render(base, slot=slot, msaa=False, draft=True)
     assert renderer.scene_warped is False
     b_color, b_invd, b_sun = _gbuffer(renderer, slot)
     renderer.render(turned, slot=slot, msaa=False, draft=True)
-    assert renderer.scene_warped is True
+    assert renderer.warped == "scene"
     color, invd, sun = _gbuffer(renderer, slot, size)
     tx, ty, seen = _by_hand(cam.view(base.camera, W, H), cam.view(turned.camera, *size), size)
     # the hand's ray and the shader's differ in float32 rounding: a pixel whose ray falls
@@ -89,3 +91,37 @@ def test_a_preview_that_moves_the_eye_or_turns_far_is_drawn_whole(renderer):
     assert renderer.scene_warped is False
     renderer.render(_look(52.0), slot="warp-test-2", msaa=True, draft=False)   # a full frame never warps
     assert renderer.scene_warped is False
+
+
+def test_a_turned_previews_frame_is_the_last_frame_along_the_new_rays(renderer):
+    """A preview of the same look, the camera only turned (and the time on by less than
+    OUT_MAX_AGE_S), warps the last preview's finished frame (passes/warp_out.frag): where
+    that frame saw the ray, its nearest pixel (a hand-written reprojection of the decoded
+    frames); where it did not, the preview composited anew, as the same view drawn whole."""
+    from fogbank.render import reproject
+    from fogbank.scene import camera as cam
+    base, turned = _look(0.0), _look(-4.0, -2.0).model_copy(update={"time": 1.2})
+    before = renderer.render(base, slot="warp-frame", msaa=False, draft=True)
+    got = renderer.render(turned, slot="warp-frame", msaa=False, draft=True)
+    assert renderer.warped == "frame"
+    whole = renderer.render(turned, slot="warp-frame-whole", msaa=False, draft=True)
+    assert renderer.warped is None
+    tx, ty, seen = _by_hand(cam.view(base.camera, W, H), cam.view(turned.camera, W, H))
+    # images are top row first; the hand's arrays bottom row first
+    got_b, whole_b, before_b = got[::-1].astype(int), whole[::-1].astype(int), before[::-1].astype(int)
+    same = np.all(got_b == before_b[ty, tx], axis=2)
+    assert 0.5 < seen.mean() < 0.99
+    assert float(1.0 - same[seen].mean()) <= 0.002
+    d = np.abs(got_b - whole_b).max(axis=2)[~seen]
+    # the part composited anew: its fog texels next to the part warped see that part's
+    # cleared scene pass (the sky), a few pixels off by more than a level
+    assert float(np.mean(d <= 2)) >= 0.97
+    assert float(d.mean()) <= 0.6
+    # past OUT_MAX_AGE_S of the look's time, or with the look changed, the frame is drawn
+    later = turned.model_copy(update={"time": 1.2 + 2 * reproject.OUT_MAX_AGE_S,
+                                      "camera": _look(-5.0, -2.0).camera})
+    renderer.render(later, slot="warp-frame", msaa=False, draft=True)
+    assert renderer.warped == "scene"
+    denser = _look(-6.0, -2.0, density=1.2).model_copy(update={"time": later.time})
+    renderer.render(denser, slot="warp-frame", msaa=False, draft=True)
+    assert renderer.warped == "scene"

@@ -186,6 +186,51 @@ def test_paused_state_is_in_the_page_url():
     assert s.state(1.0)["query"] == "v=1&time=7"
 
 
+def _dragging_session(name: str) -> Session:
+    s = Session(name, now=0.0)
+    s.apply(msg('{"type": "play", "playing": false}'), 0.0)
+    s.apply(msg('{"type": "view", "width": 1280, "height": 720}'), 0.0)
+    s.apply(msg('{"type": "interact", "active": true}'), 0.0)
+    return s
+
+
+def _preview(s: Session, t: float, ms: float, warped: bool = False) -> int:
+    """A preview frame at time t that took `ms`, its scene pass warped or not: the width
+    of the next preview's rung."""
+    s.apply(msg('{"type": "camera", "camera": {"yaw": %s}}' % t), t)
+    job = s.start_frame(t)
+    assert not job.full
+    s.measured(job, ms, t, scene_warped=warped)
+    s.frame_done(job, sent=True)
+    s.apply(msg(f'{{"type": "ack", "frame": {job.frame}}}'), t)
+    return s.preview_rung
+
+
+def test_a_warped_preview_does_not_take_the_drag_back_up():
+    """A step down that did not pay goes back up (the look's cost is fixed, not in its
+    pixels), but only by what a preview drawn whole says: a warped preview's cost is what
+    its base saw (render/reproject.py), and one over the budget steps further down."""
+    for warped, rung_after in ((False, 0), (True, 2)):
+        s = _dragging_session(f"w{warped}")
+        assert _preview(s, 0.1, 60.0) == 1            # over the budget: a step down
+        assert _preview(s, 0.2, 50.0, warped) == rung_after
+
+
+def test_a_rungs_cost_is_its_previews_running_mean():
+    """A drag whose previews warp takes cheap frames and, every few, one drawn whole: the
+    rung's cost is their running mean (a quarter each), so that one whole frame does not
+    move the drag (a 0.75 rung in budget stays, after a costly frame at 45 ms)."""
+    s = _dragging_session("m")
+    assert _preview(s, 0.1, 60.0) == 1                 # 1.0 over the budget: 0.75
+    t = 0.2
+    for _ in range(4):
+        assert _preview(s, t, 26.0, warped=True) == 1  # within the budget, not a fifth to spare
+        t += 0.1
+    # one frame drawn whole, over the budget: the mean (0.75 x 26 + 0.25 x 45 = 30.75) is not
+    assert _preview(s, t, 45.0) == 1
+    assert 0.8 * PREVIEW_BUDGET_MS < 0.75 * 26.0 + 0.25 * 45.0 <= PREVIEW_BUDGET_MS < 45.0
+
+
 def test_a_look_made_costly_in_one_step_starts_its_previews_where_its_estimate_fits():
     """Issue 13: 16 volume-noise layers of 128 samples set in one message. The ladder alone
     would first draw that look at the old look's size (tens of seconds a frame at 960x540);

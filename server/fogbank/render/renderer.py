@@ -46,9 +46,10 @@ class Renderer:
         # whether the latest frame's scene pass was the cached one (begin): a stream's
         # session learns from it that the cache let its scene pass go (stream/session.py)
         self.scene_reused = False
-        # whether it warped an earlier preview's scene pass (render/reproject.py): its cost
+        # what the latest frame warped from an earlier preview (render/reproject.py): None,
+        # "scene" (its scene pass) or "frame" (its finished frame); a warped frame's cost
         # says little of what the look costs (stream/session.py does not calibrate by it)
-        self.scene_warped = False
+        self.warped: str | None = None
         self.sims = Simulations()
         self.rays = RayCaster(self)
         self._prep = ThreadPoolExecutor(1, thread_name_prefix="fog-plan")
@@ -75,17 +76,29 @@ class Renderer:
         g.last_frame = "reused" if cached else ("new" if g.scene_key is None else "redrawn")
         self.scene_reused = cached
         # a preview that only turned the camera since the base preview warps its scene pass
-        warp = None
+        # a preview that only turned the camera since an earlier one warps: its finished
+        # frame, from the last preview of the same look drawn whole at its size (the part
+        # it did not see drawn and composited anew), else its scene pass, from the slot's
+        # latest preview scene pass (render/reproject.py)
+        warp = out_warp = None
         if not cached and draft and not msaa:
-            src = self.caches.warp_source(slot, still.effects.sun_through_fog, reproject.warp_key(still, coarse))
-            if src is not None:
-                warp = reproject.plan(src.warp_view, view, w, h, src.warp_base)
-        self.scene_warped = warp is not None
+            if (g.out_key is not None and still.effects.blur == "off" and abs(still.time - g.out_time) <= reproject.OUT_MAX_AGE_S
+                    and g.out_key == reproject.look_key(still, coarse)):
+                out_warp = reproject.plan(g.out_view, view, w, h, g.out_base)
+            if out_warp is None:
+                src = self.caches.warp_source(slot, still.effects.sun_through_fog, reproject.warp_key(still, coarse))
+                if src is not None:
+                    warp = reproject.plan(src.warp_view, view, w, h, src.warp_base)
+        self.warped = "frame" if out_warp is not None else ("scene" if warp is not None else None)
         # the plan's split (FogPlan.split) is what asks the fog pass to hold
         plan = self._prep.submit(plan_fog, still, still.time, view.eye, self.sims, hold_fog and cached, True)
         return Frame(still=still, slot=slot, msaa=msaa, view=view,
                      targets=self.caches.targets(w, h), gbuffer=g, plan=plan,
-                     scene_key=key, scene_cached=cached, draft=draft, coarse_shadow=coarse, warp=warp)
+                     scene_key=key, scene_cached=cached, draft=draft, coarse_shadow=coarse, warp=warp, out_warp=out_warp)
+
+    @property
+    def scene_warped(self) -> bool:
+        return self.warped is not None
 
     def render(self, still, slot: str = "still", msaa: bool = True, hold_fog: bool = False,
                draft: bool = False, lend: bool = False, channels: int = 3) -> np.ndarray:

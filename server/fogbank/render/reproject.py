@@ -57,6 +57,20 @@ def warp_key(still, coarse_shadow: bool) -> tuple:
     return (still.scene, still.camera.position, still.camera.fov, still.sun, coarse_shadow)
 
 
+# A preview's finished frame is warped from one drawn at most this many seconds of the
+# look's time before (passes/warp_out.frag): what moves in it (the wind's fog, the smoke)
+# holds still in the part warped, for a drag's few frames, and the frame is drawn whole
+# again past this.
+OUT_MAX_AGE_S = 0.5
+
+
+def look_key(still, coarse_shadow: bool) -> str:
+    """What a preview's finished frame depends on besides the camera's heading and pitch
+    and the time (and its size): one with the same key warps to another."""
+    cam = still.camera.model_copy(update={"yaw": 0.0, "pitch": 0.0})
+    return still.model_copy(update={"camera": cam, "time": 0.0}).model_dump_json() + str(coarse_shadow)
+
+
 def base_ndc(base, view, px: np.ndarray, py: np.ndarray, width: int, height: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Where the rays of `view`'s pixel centres (px, py; py from the bottom) cross the base
     view's image: its normalised device x and y, and whether the ray points in front of

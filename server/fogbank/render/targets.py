@@ -77,6 +77,7 @@ class Targets:
     fog: dict[tuple[int, int], tuple[moderngl.Framebuffer, moderngl.Texture]] = field(default_factory=dict)
     linear: list[tuple[moderngl.Framebuffer, moderngl.Texture]] = field(default_factory=list)
     light: dict[tuple[int, int], "LightTargets"] = field(default_factory=dict)   # by (tile, slices)
+    out_depth: moderngl.Framebuffer | None = None   # out's colour and a depth buffer (with_depth)
     # by channels (3 RGB, 4 RGBX): the kept readback buffers (readback)
     _readback: dict[int, tuple[bytearray, np.ndarray]] = field(default_factory=dict, repr=False, compare=False)
 
@@ -93,6 +94,14 @@ class Targets:
             self._readback[channels] = (bytearray(w * h * channels), np.empty((h, w, channels), np.uint8))
         return self._readback[channels]
 
+    def with_depth(self) -> moderngl.Framebuffer:
+        """The output's colour with a depth buffer of its own (a preview's warped frame
+        masks its composite by depth: passes/warp_out.frag), made on first use."""
+        if self.out_depth is None:
+            self.out_depth = self.ctx.framebuffer(color_attachments=self.out.color_attachments,
+                                                  depth_attachment=self.ctx.depth_renderbuffer(self.size))
+        return self.out_depth
+
     def read_image(self, channels: int = 3) -> np.ndarray:
         """The output target as (height, width, channels) uint8, top row first, in the kept
         image (overwritten by the next read of this size and channels). 4: RGBX (alpha 255),
@@ -108,6 +117,8 @@ class Targets:
     def nbytes(self) -> int:
         w, h = self.size
         n = w * h * OUT_BPP
+        if self.out_depth is not None:
+            n += w * h * 4   # its depth buffer
         n += sum(len(raw) + image.nbytes for raw, image in self._readback.values())
         for sun in self.msaa_fbos:
             n += w * h * (MSAA_BPP + (MSAA_SAMPLES * SUNLIGHT_BPP if sun else 0))
@@ -118,6 +129,11 @@ class Targets:
         return n
 
     def release(self) -> None:
+        if self.out_depth is not None:   # its colour is out's, released with out
+            depth = self.out_depth.depth_attachment
+            self.out_depth.release()
+            depth.release()
+            self.out_depth = None
         for fbo in [self.out, *self.msaa_fbos.values()] + [f for f, _ in self.fog.values()] + \
                 [f for f, _ in self.linear]:
             release_fbo(fbo)
@@ -378,6 +394,13 @@ class GBuffer:
     warp_view: object = None
     warp_key: object = None
     warp_serial: int = 0           # when it was kept (TargetCache.warp_source: the latest serves)
+    # a preview's finished frame (RGBA8 as output), which the next previews of its look at
+    # this size warp while the camera only turns (passes/warp_out.frag): the view and the
+    # look's time it was drawn at, and the look (reproject.look_key)
+    out_base: moderngl.Framebuffer | None = None
+    out_view: object = None
+    out_key: object = None
+    out_time: float = 0.0
 
     def keep_warp_base(self, ctx: moderngl.Context, view, key) -> None:
         """Copy the scene pass just drawn whole into the warp base (a preview's, one sample)."""
@@ -395,9 +418,20 @@ class GBuffer:
 
     kept: ClassVar[int] = 0   # warp bases kept so far, in this process
 
+    def keep_out_base(self, ctx: moderngl.Context, out: moderngl.Framebuffer, view, key, time: float) -> None:
+        """Copy a preview's finished frame (`out`, this G-buffer's size) into the out base."""
+        if self.out_base is None:
+            tex = ctx.texture(out.size, 4)
+            tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+            self.out_base = ctx.framebuffer(color_attachments=[tex])
+        ctx.copy_framebuffer(self.out_base, out)
+        self.out_view, self.out_key, self.out_time = view, key, time
+
     def drop_warp_base(self) -> None:
         release_fbo(self.warp_base)
+        release_fbo(self.out_base)
         self.warp_base = self.warp_view = self.warp_key = None
+        self.out_base = self.out_view = self.out_key = None
 
     def held_fog(self, ctx: moderngl.Context, scale: int, direct: bool, whole: bool = False) -> HeldFog:
         """The held fog's targets at `scale` with a tauDirect target (`direct`), made anew
@@ -438,6 +472,8 @@ class GBuffer:
             n += self.held_light.width * self.held_light.height * HELD_LIGHT_BPS
         if self.warp_base is not None:   # colour RGBA16F, inverse distance R32F (sunlight RGBA16F)
             n += self.color.width * self.color.height * (8 + 4 + (SUNLIGHT_BPP if self.sunlight else 0))
+        if self.out_base is not None:    # RGBA8
+            n += self.color.width * self.color.height * 4
         return n + sum(h.nbytes() for h in self.held.values())
 
     @property

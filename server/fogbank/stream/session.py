@@ -649,16 +649,21 @@ class Session:
                 self.level_ratios[job.level] = (math.sqrt(old[0] * r) if fresh else r, now)
         if job.full:
             return
+        # a rung's cost: its frames' running mean (a quarter each), so that a drag whose
+        # previews warp (render/reproject.py: cheap frames, and every few a frame drawn
+        # whole) is held to their mean, not to the last one (with half each, one whole
+        # frame took a 640 px drag back up to 960)
         prev = self.preview_costs.get(job.rung)
-        ms = render_ms if prev is None or now - prev[1] > PREVIEW_COST_TTL_S else 0.5 * (prev[0] + render_ms)
+        ms = render_ms if prev is None or now - prev[1] > PREVIEW_COST_TTL_S else 0.75 * prev[0] + 0.25 * render_ms
         self.preview_costs[job.rung] = (ms, now)
         if job.rung != self.preview_rung:
             return   # a frame of an earlier rung: recorded, no step taken
         i = self.preview_rung
         budget = self.preview_budget()
         fresh = lambda k: (c := self.preview_costs.get(k)) is not None and now - c[1] <= PREVIEW_COST_TTL_S  # noqa: E731
-        if i > 0 and fresh(i - 1) and self.preview_costs[i - 1][0] <= 1.25 * ms:
-            # the step down did not pay (the cost is fixed, not in the pixels): back up
+        if not scene_warped and i > 0 and fresh(i - 1) and self.preview_costs[i - 1][0] <= 1.25 * ms:
+            # the step down did not pay (the cost is fixed, not in the pixels): back up. A
+            # warped preview says nothing of that: its cost is what its base saw
             self.preview_rung = i - 1
         elif ms > budget and i + 1 < len(PREVIEW_RUNGS):
             # no step down that did not pay: a look whose cost is fixed (not in its

@@ -57,7 +57,7 @@ class CompositePass(Pass):
     copied into place (_held_far)."""
     name = "composite"
     reads = ("gbuffer.color", "gbuffer.invdist", "gbuffer.sunlight", "gbuffer.far", "gbuffer.tiles",
-             "gbuffer.held", "fog", "view")
+             "gbuffer.held", "fog", "view", "gbuffer.out_base")
     writes = ("out", "linear", "gbuffer.held")
 
     def run(self, r, f) -> None:
@@ -120,11 +120,15 @@ class CompositePass(Pass):
                 g.far_sunlight.use(TEX["uFarSunLight"])
         f.fog_tex.use(TEX["uFog"])
         target = f.targets.linear_pair()[0][0] if mode == BLUR_MODES["separate"] else f.targets.out
+        if f.out_warp is not None:   # a preview's frame warped (blur off, never held): composited where unseen
+            target = self._warp_out(r, f)
         if smooth:
             self._held_draws(r, f.held_fog, target, smooth=progs[1], kept=progs[0])
         else:
             target.use()
             r.programs.draw(progs[0], moderngl.TRIANGLES)
+        if f.out_warp is not None:
+            r.ctx.disable(moderngl.DEPTH_TEST)
         if g.two_surfaces:
             tiles, count = g.silhouette_tiles(r.ctx)
             if count:
@@ -133,6 +137,25 @@ class CompositePass(Pass):
                     self._held_far(r, f, progs[-1], scatter, target, count, mode)
                 else:
                     r.programs.draw(progs[-1], moderngl.TRIANGLES, vertices=6, instances=count)
+
+    @staticmethod
+    def _warp_out(r, f) -> moderngl.Framebuffer:
+        """A preview's finished frame from the last one drawn whole (passes/warp_out.frag)
+        into the output, its depth 0 where that one saw the ray; returns the output with
+        that depth, the depth test on, for the composite to draw only where it is 1."""
+        v, b = f.view, f.out_warp.base
+        prog = r.programs.get(FULLSCREEN, "passes/warp_out.frag")
+        set_uniforms(prog, {"uFwd": v.fwd, "uRight": v.right, "uUp": v.up,
+                            "uBaseFwd": b.fwd, "uBaseRight": b.right, "uBaseUp": b.up})
+        f.out_warp.source.color_attachments[0].use(TEX["uBaseOut"])
+        fbo = f.targets.with_depth()
+        fbo.use()
+        ctx = r.ctx
+        ctx.enable(moderngl.DEPTH_TEST)
+        ctx.depth_func = "1"   # always: every pixel's depth is the mask
+        r.programs.draw(prog, moderngl.TRIANGLES)
+        ctx.depth_func = "<"   # the composite's triangle (depth 0.5) where the mask is 1
+        return fbo
 
     @staticmethod
     def _held_far(r, f, compact, scatter, target, runs: int, mode: int) -> None:

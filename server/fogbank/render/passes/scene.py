@@ -66,6 +66,13 @@ class ScenePass(Pass):
             f.gbuffer.drop_held()
         target = scene_target(f)
         target.use()
+        if f.out_warp is not None:   # a warped finished frame: the scene only where its base did not see
+            target.clear(0.0, 0.0, 0.0, 1.0, depth=1.0)
+            self._mask(r, f, f.out_warp, target)
+            if f.out_warp.rects:
+                self._draw(r, f, [cull for _, cull in f.out_warp.rects])
+            f.gbuffer.scene_key = None   # a part of the pass: nothing later reuses it
+            return
         if f.warp is None:
             target.clear(0.0, 0.0, 0.0, 1.0, depth=1.0)
             self._draw(r, f, [f.view.view_proj])
@@ -143,6 +150,24 @@ class ScenePass(Pass):
                 row = groups[keep[k]]
                 first, count = (row[0], row[1]) if level[k] == 0 else (row[6], row[7])
                 mesh.objects.render(moderngl.TRIANGLES, vertices=int(count), first=int(first))
+
+    @staticmethod
+    def _mask(r, f, warp, target) -> None:
+        """The depth mask alone (passes/warp_mask.frag): 0 where the base saw the ray."""
+        v, b = f.view, warp.base
+        prog = r.programs.get(FULLSCREEN, "passes/warp_mask.frag")
+        set_uniforms(prog, {"uFwd": v.fwd, "uRight": v.right, "uUp": v.up,
+                            "uBaseFwd": b.fwd, "uBaseRight": b.right, "uBaseUp": b.up})
+        ctx = r.ctx
+        ctx.enable(moderngl.DEPTH_TEST)
+        ctx.depth_func = "1"
+        n = len(target.color_attachments)
+        target.color_mask = [(False,) * 4] * n if n > 1 else (False,) * 4
+        target.use()
+        r.programs.draw(prog, moderngl.TRIANGLES)
+        target.color_mask = [(True,) * 4] * n if n > 1 else (True,) * 4
+        target.use()
+        ctx.depth_func = "<"
 
     @staticmethod
     def _warp(r, f) -> None:

@@ -45,9 +45,10 @@ class SkyPass(Pass):
             "uFwd": v.fwd, "uRight": v.right, "uUp": v.up, "uSunDir": look.sun.direction(),
             "uSunColor": sun_color(look), "uFlatSky": look.scene == "calibration",
             "uFlatSkyColor": np.array(srgb_to_linear(CALIBRATION_SKY))})
-        if f.warp is None or f.warp.rects:   # a warp's depths leave it the pixels drawn anew
+        warp = f.warp or f.out_warp
+        if warp is None or warp.rects:   # a warp's depths leave it the pixels drawn anew
             r.programs.draw(r.sky_prog, moderngl.TRIANGLES)
         ctx.depth_func = "<"
         ctx.disable(moderngl.DEPTH_TEST)
-        if f.warp is None and not f.msaa and f.draft:   # a preview's pass drawn whole: what the next ones warp
+        if warp is None and not f.msaa and f.draft:   # a preview's pass drawn whole: what the next ones warp
             f.gbuffer.keep_warp_base(ctx, v, reproject.warp_key(look, f.coarse_shadow))
