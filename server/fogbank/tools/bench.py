@@ -419,15 +419,20 @@ def preview_markdown(prev: dict) -> list[str]:
          "The default look's preview as a stream's worker draws it while the page's left-drag "
          "turns the camera 2 degrees a frame (draft, no MSAA, fog scale 4, time running; render "
          "alone), 40 frames, median of the last 35; each size and code a fresh process, in turn "
-         "in each round, median of the rounds (ms). This code warps the previews' scene pass "
-         "while the camera only turns (render/reproject.py).", "",
+         "in each round, median of the rounds (ms). This code warps the previews while the camera "
+         "only turns: the last preview's finished frame, else its scene pass (render/reproject.py).", "",
          "| size, code | ms | rounds | vs before |", "|---|---|---|---|"]
-    for label, row in prev.items():
+    return L + _rounds_rows(prev, lambda label, row: f"{label} ({row['tree']})" if "tree" in row else label) + [""]
+
+
+def _rounds_rows(rows: dict, name_of) -> list[str]:
+    """Table rows of (name, median ms, every round's ms, the ratio to before)."""
+    out = []
+    for label, row in rows.items():
         ratio = f"{row['vs_before']:.2f}x" if "vs_before" in row else "-"
         rounds = ", ".join(f"{v:.1f}" for v in row["rounds"])
-        name = f"{label} ({row['tree']})" if "tree" in row else label
-        L.append(f"| {name} | {row['ms']:.1f} | {rounds} | {ratio} |")
-    return L + [""]
+        out.append(f"| {name_of(label, row)} | {row['ms']:.1f} | {rounds} | {ratio} |")
+    return out
 
 
 def workers_scaling(seconds: float, clients: int = 4) -> list[dict]:
@@ -876,11 +881,8 @@ def lit_markdown(lit: dict) -> list[str]:
          "round, median of the rounds (ms). The limit: at most 30% over the earlier code's frame, "
          "or a quality setting a look can lower (`effects.light_quality`).", "",
          "| light | ms | rounds | vs before |", "|---|---|---|---|"]
-    for label, row in lit.items():
-        ratio = f"{row['vs_before']:.2f}x" if "vs_before" in row else "-"
-        rounds = ", ".join(f"{v:.1f}" for v in row["rounds"])
-        name = f"before ({row['tree']})" if label == "before" and "tree" in row else label
-        L.append(f"| {name} | {row['ms']:.1f} | {rounds} | {ratio} |")
+    L += _rounds_rows(lit, lambda label, row: f"before ({row['tree']})" if label == "before" and "tree" in row
+                      else label)
     if before is None:
         L += ["", "(no earlier tree was given: `--before-tree DIR`)"]
     return L + [""]

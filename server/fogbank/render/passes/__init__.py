@@ -2,8 +2,11 @@
 frame's inputs are the look, the view and the fog plan (render/frame.py).
 
     shadow     look.sun, meshes              -> shadow_map
-    scene      meshes, shadow_map, view      -> scene_target (cleared)
-    sky        look.sun, view, scene_target  -> scene_target (where no surface is)
+    scene      meshes, shadow_map, view,     -> scene_target (cleared; a turning drag's
+               gbuffer.warp_base                preview warps an earlier one's, and draws
+                                                only what that one did not see)
+    sky        look.sun, view, scene_target  -> scene_target (where no surface is), and
+                                                a preview's whole pass: gbuffer.warp_base
     resolve    scene_target                  -> gbuffer (near and far surface per pixel)
     light      fog_plan, view, shadow_map    -> light_grid (lit looks: the sunlit share of
                                                 the in-scattered light along coarse rays)
@@ -12,10 +15,13 @@ frame's inputs are the look, the view and the fog plan (render/frame.py).
     fog_filter fog, fog_plan                 -> fog (3x3, jittered looks only)
     particles  gbuffer.invdist, fog_plan,    -> fog (clarity multiplied in, their light
                light_grid                       composited over the fog's)
-    composite  gbuffer, fog                  -> out (or linear, blur separate; over a held
-                                                fog, from inputs held with it)
+    composite  gbuffer, fog,                 -> out (or linear, blur separate; over a held
+               gbuffer.out_base                 fog, from inputs held with it; a turning
+                                                drag's preview: an earlier one's frame
+                                                warped, composited where it did not see)
     blur       linear                        -> out
-    output     out                           -> image
+    output     out                           -> image, and a preview drawn whole:
+                                                gbuffer.out_base
 """
 
 from __future__ import annotations
