@@ -95,16 +95,28 @@ def test_a_preview_that_moves_the_eye_or_turns_far_is_drawn_whole(renderer):
 
 def test_a_turned_previews_frame_is_the_last_frame_along_the_new_rays(renderer):
     """A preview of the same look, the camera only turned (and the time on by less than
-    OUT_MAX_AGE_S), warps the last preview's finished frame (passes/warp_out.frag): where
-    that frame saw the ray, its nearest pixel (a hand-written reprojection of the decoded
-    frames); where it did not, the preview composited anew, as the same view drawn whole."""
+    OUT_MAX_AGE_S), warps the last preview's finished frame (passes/warp_out.frag), the
+    look at that frame's time: where that frame saw the ray, its nearest pixel (a
+    hand-written reprojection of the decoded frames); where it did not, the preview
+    composited anew, as the same view drawn whole at that time."""
     from fogbank.render import reproject
     from fogbank.scene import camera as cam
+    from fogbank.render.passes import FRAME_PASSES
     base, turned = _look(0.0), _look(-4.0, -2.0).model_copy(update={"time": 1.2})
     before = renderer.render(base, slot="warp-frame", msaa=False, draft=True)
-    got = renderer.render(turned, slot="warp-frame", msaa=False, draft=True)
+    base_plan = renderer.caches.gbuffer("warp-frame", W, H, True).last_plan[1]
+    f = renderer.begin(turned, "warp-frame", False, False, True)
     assert renderer.warped == "frame"
-    whole = renderer.render(turned, slot="warp-frame-whole", msaa=False, draft=True)
+    # the look at its base's time, and the plan made for it (the same look, eye and time)
+    assert f.still.time == base.time
+    assert f.plan is base_plan
+    f.channels = 3
+    for p in FRAME_PASSES:
+        p.run(renderer, f)
+    renderer.keep_only(f)
+    got = f.image.copy()
+    whole = renderer.render(turned.model_copy(update={"time": base.time}), slot="warp-frame-whole", msaa=False,
+                            draft=True)
     assert renderer.warped is None
     tx, ty, seen = _by_hand(cam.view(base.camera, W, H), cam.view(turned.camera, W, H))
     # images are top row first; the hand's arrays bottom row first

@@ -75,23 +75,38 @@ class Renderer:
         cached = (old is not None and old[:3] == key[:3] and (old[3] or not msaa) and (draft or not old[4]))
         g.last_frame = "reused" if cached else ("new" if g.scene_key is None else "redrawn")
         self.scene_reused = cached
-        # a preview that only turned the camera since the base preview warps its scene pass
         # a preview that only turned the camera since an earlier one warps: its finished
         # frame, from the last preview of the same look drawn whole at its size (the part
         # it did not see drawn and composited anew), else its scene pass, from the slot's
         # latest preview scene pass (render/reproject.py)
         warp = out_warp = None
-        if not cached and draft and not msaa:
-            if (g.out_key is not None and still.effects.blur == "off" and abs(still.time - g.out_time) <= reproject.OUT_MAX_AGE_S
-                    and g.out_key == reproject.look_key(still, coarse)):
+        look = reproject.look_key(still, coarse) if draft and not msaa else None
+        if not cached and look is not None:
+            if (g.out_key == look and still.effects.blur == "off"
+                    and abs(still.time - g.out_time) <= reproject.OUT_MAX_AGE_S):
                 out_warp = reproject.plan(g.out_view, view, w, h, g.out_base)
             if out_warp is None:
                 src = self.caches.warp_source(slot, still.effects.sun_through_fog, reproject.warp_key(still, coarse))
                 if src is not None:
                     warp = reproject.plan(src.warp_view, view, w, h, src.warp_base)
         self.warped = "frame" if out_warp is not None else ("scene" if warp is not None else None)
-        # the plan's split (FogPlan.split) is what asks the fog pass to hold
-        plan = self._prep.submit(plan_fog, still, still.time, view.eye, self.sims, hold_fog and cached, True)
+        plan = None
+        if look is not None:
+            # a warped frame shows the look at its base's time, the part drawn anew too (no
+            # seam between what moved and what did not), and takes the plan of the frames
+            # before it at that time: the same look, eye and time make the same plan (the
+            # particles simulated and lit, the layers packed: CPU work that competed with
+            # the GL for the two cores)
+            if out_warp is not None:
+                still = still.model_copy(update={"time": g.out_time})
+            plan_key = (look, still.time, tuple(view.eye), hold_fog and cached)
+            if g.last_plan is not None and g.last_plan[0] == plan_key:
+                plan = g.last_plan[1]
+        if plan is None:
+            # the plan's split (FogPlan.split) is what asks the fog pass to hold
+            plan = self._prep.submit(plan_fog, still, still.time, view.eye, self.sims, hold_fog and cached, True)
+            if look is not None:
+                g.last_plan = (plan_key, plan)
         return Frame(still=still, slot=slot, msaa=msaa, view=view,
                      targets=self.caches.targets(w, h), gbuffer=g, plan=plan,
                      scene_key=key, scene_cached=cached, draft=draft, coarse_shadow=coarse, warp=warp, out_warp=out_warp)

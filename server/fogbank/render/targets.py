@@ -401,6 +401,7 @@ class GBuffer:
     out_view: object = None
     out_key: object = None
     out_time: float = 0.0
+    last_plan: tuple | None = None   # (what it was made of, its future): the last preview's fog plan (Renderer.begin)
 
     def keep_warp_base(self, ctx: moderngl.Context, view, key) -> None:
         """Copy the scene pass just drawn whole into the warp base (a preview's, one sample)."""
