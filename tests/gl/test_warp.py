@@ -50,7 +50,7 @@ def _by_hand(base_view, view, size: tuple[int, int] = (W, H), base_size: tuple[i
 
 # (turn, the turned preview's size): the drag's ladder may change the size between (a
 # base of another size serves)
-@pytest.mark.parametrize("turn,size", [((2.0, 0.0), (W, H)), ((-5.0, -2.0), (W, H)), ((3.0, 1.0), (448, 252)),
+@pytest.mark.parametrize("turn,size", [((2.0, 0.0), (W, H)), ((-5.0, -2.0), (W, H)), ((3.0, 1.0), (160, 90)),
                                        ((-2.0, 0.0), (224, 126))])
 def test_a_turned_preview_is_its_base_along_the_new_rays(renderer, turn, size):
     from fogbank.scene import camera as cam
@@ -137,3 +137,37 @@ def test_a_turned_previews_frame_is_the_last_frame_along_the_new_rays(renderer):
     denser = _look(-6.0, -2.0, density=1.2).model_copy(update={"time": later.time})
     renderer.render(denser, slot="warp-frame", msaa=False, draft=True)
     assert renderer.warped == "scene"
+
+
+def test_a_previews_frame_warps_from_the_last_one_as_large_or_larger(renderer):
+    """The drag's ladder changes the previews' size: a preview at a smaller size warps the
+    slot's last frame drawn whole at a larger one (its nearest pixel, the hand's
+    reprojection); a larger one does not take a smaller base, which blown up would stay
+    coarse, and draws whole."""
+    from fogbank.scene import camera as cam
+    base = _look(0.0, size=(448, 252))
+    turned = _look(3.0, 1.0).model_copy(update={"time": 1.1})
+    before = renderer.render(base, slot="warp-frame-size", msaa=False, draft=True)
+    got = renderer.render(turned, slot="warp-frame-size", msaa=False, draft=True)
+    assert renderer.warped == "frame"
+    tx, ty, seen = _by_hand(cam.view(base.camera, 448, 252), cam.view(turned.camera, W, H), (W, H), (448, 252))
+    same = np.all(got[::-1].astype(int) == before[::-1].astype(int)[ty, tx], axis=2)
+    assert seen.mean() > 0.7
+    assert float(1.0 - same[seen].mean()) <= 0.002
+    larger = _look(4.0, 1.0, size=(640, 360)).model_copy(update={"time": 1.1})
+    renderer.render(larger, slot="warp-frame-size", msaa=False, draft=True)
+    assert renderer.warped is None
+
+
+def test_a_full_frame_lets_the_bases_go_and_a_still_camera_is_not_warped(renderer):
+    """A frame that does not turn is not warped (it would show the base's moment again),
+    and a full frame ends the drag: its G-buffer lets its warp bases go."""
+    base = _look(0.0)
+    renderer.render(base, slot="warp-bases", msaa=False, draft=True)
+    g = renderer.caches.gbuffer("warp-bases", W, H, True)
+    assert g.warp_base is not None and g.out_base is not None
+    renderer.render(base.model_copy(update={"time": 1.2, "density": 1.3}), slot="warp-bases", msaa=False,
+                    draft=True)
+    assert renderer.warped is None   # the same camera, its scene pass reused
+    renderer.render(_look(2.0), slot="warp-bases", msaa=True, draft=False)
+    assert g.warp_base is None and g.out_base is None

@@ -76,17 +76,26 @@ class Renderer:
         g.last_frame = "reused" if cached else ("new" if g.scene_key is None else "redrawn")
         self.scene_reused = cached
         # a preview that only turned the camera since an earlier one warps: its finished
-        # frame, from the last preview of the same look drawn whole at its size (the part
-        # it did not see drawn and composited anew), else its scene pass, from the slot's
-        # latest preview scene pass (render/reproject.py)
+        # frame, from the slot's last preview of the same look drawn whole, at its size or
+        # larger (the part it did not see drawn and composited anew), else its scene pass,
+        # from the slot's latest preview scene pass (render/reproject.py); a full frame
+        # lets the bases go (the drag is over)
         warp = out_warp = None
         look = reproject.look_key(still, coarse) if draft and not msaa else None
+        if not draft and (g.warp_base is not None or g.out_base is not None):
+            self.caches.park()   # never release the bound framebuffer
+            g.drop_warp_base()
+        out_src = None
         if not cached and look is not None:
-            if (g.out_key == look and still.effects.blur == "off"
-                    and abs(still.time - g.out_time) <= reproject.OUT_MAX_AGE_S):
-                out_warp = reproject.plan(g.out_view, view, w, h, g.out_base)
+            if still.effects.blur == "off":
+                out_src = self.caches.out_source(slot, (w, h), still.effects.sun_through_fog, look, still.time,
+                                                 reproject.OUT_MAX_AGE_S)
+            # a frame that turned (held still, it would show the base's moment again)
+            if out_src is not None and out_src.out_view.view_proj.tobytes() != view.view_proj.tobytes():
+                out_warp = reproject.plan(out_src.out_view, view, w, h, out_src.out_base)
             if out_warp is None:
-                src = self.caches.warp_source(slot, still.effects.sun_through_fog, reproject.warp_key(still, coarse))
+                src = self.caches.warp_source(slot, (w, h), still.effects.sun_through_fog,
+                                              reproject.warp_key(still, coarse))
                 if src is not None:
                     warp = reproject.plan(src.warp_view, view, w, h, src.warp_base)
         self.warped = "frame" if out_warp is not None else ("scene" if warp is not None else None)
@@ -98,10 +107,11 @@ class Renderer:
             # particles simulated and lit, the layers packed: CPU work that competed with
             # the GL for the two cores)
             if out_warp is not None:
-                still = still.model_copy(update={"time": g.out_time})
+                still = still.model_copy(update={"time": out_src.out_time})
             plan_key = (look, still.time, tuple(view.eye), hold_fog and cached)
-            if g.last_plan is not None and g.last_plan[0] == plan_key:
-                plan = g.last_plan[1]
+            for kept in (g.last_plan, out_src.last_plan if out_warp is not None else None):
+                if kept is not None and kept[0] == plan_key:
+                    plan = kept[1]
         if plan is None:
             # the plan's split (FogPlan.split) is what asks the fog pass to hold
             plan = self._prep.submit(plan_fog, still, still.time, view.eye, self.sims, hold_fog and cached, True)

@@ -12,13 +12,20 @@ rectangles round that part). On llvmpipe the scene pass of the default look's pr
 640x360 took 36 ms, about 10 of them vertices and the rest fragments; warped, while the
 drag turns 2 degrees a frame, about 16 (6 the warp itself).
 
-The earlier pass (the base, render/targets.py GBuffer.warp_base) is a preview's scene pass drawn
-whole, and stays the base while later previews warp from it, at whatever size the drag's
-ladder asks for next (the finer texels of a sharper base, or a coarser base's blown up
-until the pass is drawn whole at the new size): always from the drawn pass,
-never from a warped one, so resampling errors do not add up over a drag (each warped pixel
-is within half a texel of where it belongs). When the part not seen grows past
-WARP_MAX_SHARE of the frame, the pass is drawn whole again and becomes the base."""
+The earlier pass (the base, render/targets.py GBuffer.warp_base) is a preview's scene pass
+drawn whole, at the new preview's size or larger (a smaller one, blown up, would stay
+coarse: its terrain detail is chosen for its own size), and stays the base while later
+previews warp from it: always from a drawn pass, never from a warped one, so resampling
+errors do not add up over a drag (each warped pixel is within half a texel of where it
+belongs). When the part not seen grows past WARP_MAX_SHARE of the frame, the pass is drawn
+whole again and becomes the base.
+
+A preview of the same look (its parameters all but the heading, the pitch, the time and
+the size: look_key) warps the last such preview's finished frame instead
+(passes/warp_out.frag), the look held at that frame's time for at most OUT_MAX_AGE_S; the
+part it did not see is drawn and composited anew at that time. That frame's own scene pass
+may have been warped: its pixels are then resampled twice, each time by the nearest texel.
+"""
 
 from __future__ import annotations
 
@@ -37,6 +44,9 @@ WARP_MAX_SHARE = 0.4
 # frustum's image), and between two samples it can hide at most STRIDE px. The rectangles
 # only cull: the warp's depth mask decides each pixel (passes/warp.frag).
 STRIDE = 4
+# The rectangles take rays this close to the base's edge (in its normalised device
+# coordinates) as unseen: float32 in the shader against float64 here.
+SEEN_EPS = 1e-5
 
 
 @dataclass(frozen=True)
@@ -65,10 +75,11 @@ OUT_MAX_AGE_S = 0.5
 
 
 def look_key(still, coarse_shadow: bool) -> str:
-    """What a preview's finished frame depends on besides the camera's heading and pitch
-    and the time (and its size): one with the same key warps to another."""
+    """What a preview's finished frame depends on besides the camera's heading and pitch,
+    the time and its size: one with the same key warps to another."""
     cam = still.camera.model_copy(update={"yaw": 0.0, "pitch": 0.0})
-    return still.model_copy(update={"camera": cam, "time": 0.0}).model_dump_json() + str(coarse_shadow)
+    return (still.model_copy(update={"camera": cam, "time": 0.0, "width": 1, "height": 1}).model_dump_json()
+            + str(coarse_shadow))
 
 
 def base_ndc(base, view, px: np.ndarray, py: np.ndarray, width: int, height: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -96,13 +107,14 @@ def _bbox(px: np.ndarray, py: np.ndarray, mask: np.ndarray, width: int, height: 
 
 def unseen_rects(base, view, width: int, height: int) -> list[tuple[int, int, int, int]]:
     """Rectangles (x, y, w, h px, y from the bottom) that hold every pixel of `view` whose
-    ray the base view did not see (within EDGE_TEXELS of its edge counts as not seen): one
-    round those past its left or right edge (or behind it), one round those past its
-    bottom or top. A heading turned with the camera pitched is no turn about the image's
-    vertical: the base's top and bottom edges tilt in the new image, and leave a wedge a
-    few px high along the frame's width beside the strip at its side (its bounding box
-    with the strip's would be most of the frame; where the two overlap, both draw it).
-    Empty when it saw them all."""
+    ray the base view did not see: one round those past each of its four edges (a ray
+    within SEEN_EPS of an edge counts as past it: the shader decides each pixel in
+    float32, passes/warp_seen.glsl, and a pixel it calls unseen must lie in a rectangle).
+    A heading turned with the camera pitched is no turn about the image's vertical: the
+    base's top and bottom edges tilt in the new image, each the other way, and leave a
+    wedge a few px high along part of the frame's width beside the strip at its side (one
+    bounding box round them all would be most of the frame; where two overlap, both draw
+    it). All of the frame when a ray is behind the base; empty when it saw them all."""
     xs = np.unique(np.r_[np.arange(0, width, STRIDE), width - 1])
     ys = np.unique(np.r_[np.arange(0, height, STRIDE), height - 1])
     gx, gy = np.meshgrid(xs, ys)
@@ -113,7 +125,8 @@ def unseen_rects(base, view, width: int, height: int) -> list[tuple[int, int, in
     x, y, front = base_ndc(base, view, px.astype(float), py.astype(float), width, height)
     if not front.all():   # a turn past the base's side: nothing worth warping
         return [(0, 0, width, height)]
-    masks = (x < -1.0, x > 1.0, y < -1.0, y > 1.0)   # past its edges: a ray inside takes its nearest texel
+    edge = 1.0 - SEEN_EPS   # past its edges: a ray inside takes its nearest texel
+    masks = (x < -edge, x > edge, y < -edge, y > edge)
     rects = [r for r in (_bbox(px, py, m, width, height) for m in masks) if r is not None]
     return rects
 

@@ -394,13 +394,14 @@ class GBuffer:
     warp_view: object = None
     warp_key: object = None
     warp_serial: int = 0           # when it was kept (TargetCache.warp_source: the latest serves)
-    # a preview's finished frame (RGBA8 as output), which the next previews of its look at
-    # this size warp while the camera only turns (passes/warp_out.frag): the view and the
+    # a preview's finished frame (RGBA8 as output), which the next previews of its look (at
+    # any size) warp while the camera only turns (passes/warp_out.frag): the view and the
     # look's time it was drawn at, and the look (reproject.look_key)
     out_base: moderngl.Framebuffer | None = None
     out_view: object = None
     out_key: object = None
     out_time: float = 0.0
+    out_serial: int = 0            # when it was kept (TargetCache.out_source)
     last_plan: tuple | None = None   # (what it was made of, its future): the last preview's fog plan (Renderer.begin)
 
     def keep_warp_base(self, ctx: moderngl.Context, view, key) -> None:
@@ -427,6 +428,8 @@ class GBuffer:
             self.out_base = ctx.framebuffer(color_attachments=[tex])
         ctx.copy_framebuffer(self.out_base, out)
         self.out_view, self.out_key, self.out_time = view, key, time
+        GBuffer.kept += 1
+        self.out_serial = GBuffer.kept
 
     def drop_warp_base(self) -> None:
         release_fbo(self.warp_base)
@@ -637,14 +640,30 @@ class TargetCache:
     def nbytes(self) -> int:
         return self._targets.nbytes() + self._gbuffers.nbytes()
 
-    def warp_source(self, slot: str, sunlight: bool, key) -> GBuffer | None:
-        """The slot's scene pass whose warp base was kept last with this key
-        (render/reproject.py warp_key), at any size: a preview warps from it whatever its
-        own size (the drag's ladder changes the previews' size, stream/session.py, and a
-        first preview at a new size would otherwise draw its pass whole)."""
+    def out_source(self, slot: str, size: tuple[int, int], sunlight: bool, key, time: float,
+                   max_age: float) -> GBuffer | None:
+        """The slot's scene pass whose out base was kept last with this look
+        (render/reproject.py look_key), at most `max_age` s of the look's time from `time`,
+        at `size` or larger (the drag's ladder changes the previews' size; a smaller frame
+        blown up would stay coarse)."""
         best = None
         for k in self._gbuffers.keys():
-            if k[0] == slot and k[3] == sunlight:
+            if k[0] == slot and k[3] == sunlight and k[1] >= size[0] and k[2] >= size[1]:
+                g = self._gbuffers.peek(k)
+                if (g.out_key == key and abs(time - g.out_time) <= max_age
+                        and (best is None or g.out_serial > best.out_serial)):
+                    best = g
+        return best
+
+    def warp_source(self, slot: str, size: tuple[int, int], sunlight: bool, key) -> GBuffer | None:
+        """The slot's scene pass whose warp base was kept last with this key
+        (render/reproject.py warp_key), at `size` or larger: a preview warps from it
+        whatever its own size (the drag's ladder changes the previews' size,
+        stream/session.py), but a smaller base blown up would stay coarse (its terrain's
+        detail is chosen for its own size: scene.py lod_levels)."""
+        best = None
+        for k in self._gbuffers.keys():
+            if k[0] == slot and k[3] == sunlight and k[1] >= size[0] and k[2] >= size[1]:
                 g = self._gbuffers.peek(k)
                 if g.warp_key == key and (best is None or g.warp_serial > best.warp_serial):
                     best = g

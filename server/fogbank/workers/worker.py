@@ -204,7 +204,9 @@ def frame(still, slot: str, msaa: bool, quality: int, show: str = "shaded", laye
         work = (r.programs.compiled, r.noise.baked, r.shadows.new_suns)
         if show == "shaded":
             img = r.render(still, slot=slot, msaa=msaa, hold_fog=hold_fog, draft=draft, lend=True, channels=4)
-            reused, warped = r.scene_reused, r.scene_warped
+            # a warped preview's scene pass is neither reused nor lost (its finished frame
+            # warped leaves a part of one): the session learns nothing of its cache from it
+            reused, warped = (None if r.scene_warped else r.scene_reused), r.scene_warped
         else:
             img, stats = teach.render(r, still, show, layer, slot=slot)
         t1 = time.perf_counter()

@@ -46,8 +46,7 @@ class SkyPass(Pass):
             "uSunColor": sun_color(look), "uFlatSky": look.scene == "calibration",
             "uFlatSkyColor": np.array(srgb_to_linear(CALIBRATION_SKY))})
         warp = f.warp or f.out_warp
-        if warp is None or warp.rects:   # a warp's depths leave it the pixels drawn anew
-            r.programs.draw(r.sky_prog, moderngl.TRIANGLES)
+        r.programs.draw(r.sky_prog, moderngl.TRIANGLES)   # after a warp, its depths leave it the pixels drawn anew
         ctx.depth_func = "<"
         ctx.disable(moderngl.DEPTH_TEST)
         if warp is None and not f.msaa and f.draft:   # a preview's pass drawn whole: what the next ones warp

@@ -1,5 +1,6 @@
-// A preview's finished frame warped from the last preview drawn whole at its size, from the
-// same eye, of the same look but for the camera's turn and the time (render/reproject.py):
+// A preview's finished frame warped from the slot's last preview drawn whole (at any size),
+// from the same eye, of the same look but for the camera's turn and the time
+// (render/reproject.py):
 // each pixel takes the base frame's nearest texel along its own ray
 // (passes/warp_seen.glsl), 8-bit sRGB as it was output. Its depth is the mask of the
 // composite that follows (passes/composite.py): 0 where the base saw the ray, 1 where it
