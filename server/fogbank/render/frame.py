@@ -123,6 +123,7 @@ class Frame:
     coarse_shadow: bool = False    # lit by the preview shadow map (Renderer.begin)
     warp: Any = None               # the scene pass warped from an earlier preview's (render/reproject.py Warp)
     out_warp: Any = None           # the finished frame warped from an earlier preview's (Warp; passes/warp_out.frag)
+    look_key: str | None = None    # a preview's look but for heading, pitch, time and size (reproject.look_key)
     shadow: Any = None             # the shadow map it is lit by (render/resources.py ShadowMap; the shadow pass)
     light: Any = None              # the light grid its fog is lit by (passes/light.py LightGrid), if any
     held_fog: Any = None           # the held fog this frame's fog was drawn over (render/targets.py HeldFog)

@@ -119,7 +119,8 @@ class Renderer:
                 g.last_plan = (plan_key, plan)
         return Frame(still=still, slot=slot, msaa=msaa, view=view,
                      targets=self.caches.targets(w, h), gbuffer=g, plan=plan,
-                     scene_key=key, scene_cached=cached, draft=draft, coarse_shadow=coarse, warp=warp, out_warp=out_warp)
+                     scene_key=key, scene_cached=cached, draft=draft, coarse_shadow=coarse, warp=warp, out_warp=out_warp,
+                     look_key=look)
 
     @property
     def scene_warped(self) -> bool:

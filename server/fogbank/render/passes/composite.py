@@ -12,6 +12,7 @@ from fogbank.model.fields import srgb_to_linear
 from fogbank.render.gl import TEX, set_uniforms
 from fogbank.render.passes.base import Pass
 from fogbank.render.passes.output import output_defines, output_uniforms
+from fogbank.render.passes.scene import draw_warp
 from fogbank.render.passes.sky import sun_color
 from fogbank.render.programs import FULLSCREEN
 from fogbank.render.targets import FAR_LIST_WIDTH, SILHOUETTE_TILE
@@ -143,18 +144,11 @@ class CompositePass(Pass):
         """A preview's finished frame from the last one drawn whole (passes/warp_out.frag)
         into the output, its depth 0 where that one saw the ray; returns the output with
         that depth, the depth test on, for the composite to draw only where it is 1."""
-        v, b = f.view, f.out_warp.base
-        prog = r.programs.get(FULLSCREEN, "passes/warp_out.frag")
-        set_uniforms(prog, {"uFwd": v.fwd, "uRight": v.right, "uUp": v.up,
-                            "uBaseFwd": b.fwd, "uBaseRight": b.right, "uBaseUp": b.up})
         f.out_warp.source.color_attachments[0].use(TEX["uBaseOut"])
         fbo = f.targets.with_depth()
         fbo.use()
-        ctx = r.ctx
-        ctx.enable(moderngl.DEPTH_TEST)
-        ctx.depth_func = "1"   # always: every pixel's depth is the mask
-        r.programs.draw(prog, moderngl.TRIANGLES)
-        ctx.depth_func = "<"   # the composite's triangle (depth 0.5) where the mask is 1
+        # the composite's triangle (depth 0.5) then passes where the mask is 1
+        draw_warp(r, r.programs.get(FULLSCREEN, "passes/warp_out.frag"), f.view, f.out_warp)
         return fbo
 
     @staticmethod

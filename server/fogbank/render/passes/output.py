@@ -32,7 +32,5 @@ class OutputPass(Pass):
         if f.draft and not f.msaa and f.out_warp is None and f.still.effects.blur == "off":
             # a preview drawn whole (its scene pass perhaps warped, which is exact but for
             # resampling): what the next previews of its look warp (passes/warp_out.frag)
-            from fogbank.render import reproject
-            f.gbuffer.keep_out_base(r.ctx, f.targets.out, f.view,
-                                    reproject.look_key(f.still, f.coarse_shadow), f.still.time)
+            f.gbuffer.keep_out_base(r.ctx, f.targets.out, f.view, f.look_key, f.still.time)
         f.image = f.targets.read_image(f.channels)

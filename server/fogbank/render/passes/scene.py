@@ -154,33 +154,33 @@ class ScenePass(Pass):
     @staticmethod
     def _mask(r, f, warp, target) -> None:
         """The depth mask alone (passes/warp_mask.frag): 0 where the base saw the ray."""
-        v, b = f.view, warp.base
-        prog = r.programs.get(FULLSCREEN, "passes/warp_mask.frag")
-        set_uniforms(prog, {"uFwd": v.fwd, "uRight": v.right, "uUp": v.up,
-                            "uBaseFwd": b.fwd, "uBaseRight": b.right, "uBaseUp": b.up})
-        ctx = r.ctx
-        ctx.enable(moderngl.DEPTH_TEST)
-        ctx.depth_func = "1"
         n = len(target.color_attachments)
         target.color_mask = [(False,) * 4] * n if n > 1 else (False,) * 4
         target.use()
-        r.programs.draw(prog, moderngl.TRIANGLES)
+        draw_warp(r, r.programs.get(FULLSCREEN, "passes/warp_mask.frag"), f.view, warp)
         target.color_mask = [(True,) * 4] * n if n > 1 else (True,) * 4
         target.use()
-        ctx.depth_func = "<"
 
     @staticmethod
     def _warp(r, f) -> None:
         """Every pixel of the frame from the warp base along its new ray (passes/warp.frag),
         and its depth the mask of what is drawn anew: 0 where the base saw it, else 1."""
-        g, v, b = f.gbuffer, f.view, f.warp.base
-        prog = r.programs.get(FULLSCREEN, "passes/warp.frag", SUN_LIGHT=int(g.sunlight is not None))
-        set_uniforms(prog, {"uFwd": v.fwd, "uRight": v.right, "uUp": v.up,
-                            "uBaseFwd": b.fwd, "uBaseRight": b.right, "uBaseUp": b.up})
+        prog = r.programs.get(FULLSCREEN, "passes/warp.frag", SUN_LIGHT=int(f.gbuffer.sunlight is not None))
         for name, tex in zip(("uBaseColor", "uBaseInvDist", "uBaseSunLight"), f.warp.source.color_attachments):
             tex.use(TEX[name])
-        ctx = r.ctx
-        ctx.enable(moderngl.DEPTH_TEST)
-        ctx.depth_func = "1"   # always: every pixel's depth is the warp's mask
-        r.programs.draw(prog, moderngl.TRIANGLES)
-        ctx.depth_func = "<"
+        draw_warp(r, prog, f.view, f.warp)
+
+
+def draw_warp(r, prog, view, warp) -> None:
+    """Draw a program of passes/warp_seen.glsl (its textures bound) over the bound target,
+    from `view` and the warp's base view, its depth written as the mask wherever it falls
+    (the depth test on, passing always); the test is left on, passing where nearer, for
+    the draws that the mask lets through."""
+    b = warp.base
+    set_uniforms(prog, {"uFwd": view.fwd, "uRight": view.right, "uUp": view.up,
+                        "uBaseFwd": b.fwd, "uBaseRight": b.right, "uBaseUp": b.up})
+    ctx = r.ctx
+    ctx.enable(moderngl.DEPTH_TEST)
+    ctx.depth_func = "1"   # always: every pixel's depth is the mask
+    r.programs.draw(prog, moderngl.TRIANGLES)
+    ctx.depth_func = "<"
