@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from fogbank.kinds.particles import segment_distance
 from fogbank.kinds.reference import density_optical_depth
 
 # the pairwise distances are taken a block of particles at a time, each block's arrays
@@ -42,15 +41,31 @@ def particle_light(fog, packed, ref, time: float, sun_dir, sun_distance: float) 
     tau = density_optical_depth(fog, pos, np.broadcast_to(L, (n, 3)), np.full(n, sun_distance),
                                 np.full(n, time))
     log_clear = np.zeros(n)
-    alive = strength > 0
-    block = max(1, BLOCK_ELEMENTS // max(1, int(alive.sum())))
+    alive = np.flatnonzero(strength > 0)
+    # every ray runs along L for sun_distance, so the distance from particle j to row i's
+    # ray follows from dot products: with rel = p_j - p_i, s = rel.L and u = clamp(s, 0,
+    # sun_distance), |rel - u L|^2 = |rel|^2 - 2 u s + u^2 (Bourke's closest point, as
+    # kinds/particles.py segment_distance, without its (rows, alive, 3) arrays). Positions
+    # are taken from the swarm's mean: the rows' |p|^2 then stay near the swarm's size
+    # squared, and |rel|^2 = |p_i|^2 + |p_j|^2 - 2 p_i.p_j keeps about 1e-12 of it
+    centred = pos - pos[alive].mean(axis=0) if len(alive) else pos
+    cols = centred[alive]
+    s_cols, sq_cols = cols @ L, np.einsum("ij,ij->i", cols, cols)
+    s_rows, sq_rows = centred @ L, np.einsum("ij,ij->i", centred, centred)
+    opacity_at_centre = alpha[alive] * strength[alive]
+    inv_radius = 1.0 / radius[alive]
+    block = max(1, BLOCK_ELEMENTS // max(1, len(alive)))
     for lo in range(0, n, block):
         hi = min(n, lo + block)
-        dist = segment_distance(pos[alive], pos[lo:hi], np.broadcast_to(L, (hi - lo, 3)),
-                                np.full(hi - lo, sun_distance))
-        opacity = (alpha[alive] * strength[alive])[None, :] * np.clip(1.0 - dist / radius[alive][None, :], 0.0, 1.0)
-        own = np.flatnonzero(alive)[None, :] == np.arange(lo, hi)[:, None]
-        opacity = np.where(own, 0.0, np.minimum(opacity, 1.0 - 1e-12))
+        proj = s_cols[None, :] - s_rows[lo:hi, None]
+        u = np.clip(proj, 0.0, sun_distance)
+        d2 = sq_cols[None, :] + sq_rows[lo:hi, None] - 2.0 * (centred[lo:hi] @ cols.T) + u * (u - 2.0 * proj)
+        dist = np.sqrt(np.maximum(d2, 0.0))
+        opacity = np.minimum(opacity_at_centre[None, :] * np.clip(1.0 - dist * inv_radius[None, :], 0.0, 1.0),
+                             1.0 - 1e-12)
+        # a particle's own clarity is left out (the module's docstring)
+        mine = np.flatnonzero((alive >= lo) & (alive < hi))
+        opacity[alive[mine] - lo, mine] = 0.0
         log_clear[lo:hi] = np.log1p(-opacity).sum(axis=1)
     out[rows] = np.exp(-tau + max(fog.density, 0.0) * log_clear)
     return out
