@@ -25,3 +25,14 @@ def allocate(mb: int) -> dict:
     _held = np.ones(mb << 18, dtype=np.float32)   # 4 bytes each
     from fogbank.workers import worker
     return worker._run(lambda r: {})
+
+
+def spin(seconds: float) -> dict:
+    """Keep this worker's CPU busy for `seconds` (a costly job, unlike worker.sleep's idle one)."""
+    import time
+    end = time.monotonic() + seconds
+    x = 0
+    while time.monotonic() < end:
+        x += 1
+    from fogbank.workers import worker
+    return worker._run(lambda r: {"spins": x})

@@ -54,8 +54,9 @@ class Settings(BaseSettings):
                                   "to start before a worker that starts no job is taken for stuck")
     probe_interval_s: float = Field(1.0, gt=0, le=60, description="an idle worker is probed this often")
     probe_deadline_s: float = Field(5.0, gt=0, le=600, description="deadline of a probe")
-    liveness_s: float = Field(10.0, gt=0, le=600, description="/healthz fails when no worker has "
-                              "rendered (a probe or a job) for this long")
+    liveness_s: float = Field(10.0, gt=0, le=600, description="/healthz fails when no interactive "
+                              "worker has rendered (a probe or a job) for this long and none runs a job "
+                              "without stalling; /readyz, when a lane has none")
     stills_cache_mb: int = Field(64, ge=0, le=65536, description="encoded stills kept for repeats, MiB")
     max_sessions: int = Field(32, ge=1, le=10000, description="streaming sessions per process; "
                               "the next is refused with close code 1013")

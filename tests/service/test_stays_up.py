@@ -306,3 +306,117 @@ def test_the_per_client_cap_holds_when_sessions_connect_at_once():
         assert sorted(got, key=str) == sorted(["open"] * 3 + [1013] * 5, key=str)
     finally:
         srv.stop()
+
+
+def _lane_pid(url: str, lane: str) -> int:
+    body = json.loads(get(url + "/healthz")[2])
+    return next(w["pid"] for w in body["workers"] if w["lane"] == lane)
+
+
+def test_a_stalled_worker_is_the_servers_fault_and_the_stream_goes_on():
+    """Issue 33, findings 2 and 3: the interactive worker stopped (SIGSTOP) during a
+    playing stream. Before, the frame deadline paused the session with "this look took over
+    10 s a frame ... make it cheaper", no frame came for the next 47 s, and /healthz and
+    /readyz said 200 throughout. Now the stall is found by the worker's CPU time (none used
+    while jobs wait or run), the worker is replaced, the lost frame is drawn again on the
+    new one, the client is told the renderer stalled, and both probes say 503 while the
+    lane cannot render."""
+    import os
+    import signal
+    srv = Server(env={"FOGBANK_FRAME_DEADLINE_S": "4"}).start()
+    pid = _lane_pid(srv.url, "interactive")
+    probes: list[tuple[float, int, int]] = []
+    done = threading.Event()
+    t0 = time.monotonic()
+
+    def poll():
+        while not done.is_set():
+            probes.append((time.monotonic() - t0, get(srv.url + "/healthz", timeout=5)[0],
+                           get(srv.url + "/readyz", timeout=5)[0]))
+            time.sleep(0.3)
+
+    async def watch():
+        frames, texts, stopped = [], [], None
+        async with websockets.connect(srv.url.replace("http", "ws", 1) + "/ws?v=1&time=3") as ws:
+            await ws.recv(), await ws.recv()
+            await ws.send(json.dumps({"type": "view", "width": 320, "height": 180, "fps": 15}))
+            await ws.send(json.dumps({"type": "play", "playing": True}))
+            while time.monotonic() - t0 < 45:
+                if stopped is None and time.monotonic() - t0 > 4:
+                    os.kill(pid, signal.SIGSTOP)
+                    stopped = time.monotonic() - t0
+                try:
+                    m = await asyncio.wait_for(ws.recv(), 0.5)
+                except asyncio.TimeoutError:
+                    continue
+                if isinstance(m, bytes):
+                    frames.append(time.monotonic() - t0)
+                    await ws.send(json.dumps({"type": "ack", "frame": int.from_bytes(m[4:8], "little")}))
+                else:
+                    texts.append(json.loads(m))
+        return frames, texts, stopped
+
+    poller = threading.Thread(target=poll, daemon=True)
+    poller.start()
+    try:
+        frames, texts, stopped = run_async(watch())
+        done.set()
+        poller.join(10)
+        errors = [m.get("msg", "") for m in texts if m.get("type") == "error"]
+        before = [t for t in frames if t < stopped]
+        after = [t for t in frames if t > stopped + 1.0]
+        during = [(h, r) for t, h, r in probes if stopped < t < (after[0] if after else 45)]
+        print(f"\nframes before the stop {len(before)}, first after it at +{after[0] - stopped:.1f} s, "
+              f"{len(after)} after; probes while stalled (healthz, readyz) {sorted(set(during))}; "
+              f"errors {errors}")
+        assert len(before) >= 5
+        assert after and after[0] - stopped < 25.0           # was: none for 47 s
+        assert len(after) >= 20
+        assert any("stalled" in e for e in errors)
+        assert not any("took over" in e or "paused" in e for e in errors)
+        assert any(h == 503 for h, _ in during) and any(r == 503 for _, r in during)
+        assert probes[-1][1:] == (200, 200)
+        for _ in range(50):
+            if not os.path.exists(f"/proc/{pid}") or open(f"/proc/{pid}/stat").read().split()[2] == "Z":
+                break
+            time.sleep(0.2)
+        assert not os.path.exists(f"/proc/{pid}") or open(f"/proc/{pid}/stat").read().split()[2] == "Z"
+    finally:
+        done.set()
+        try:
+            os.kill(pid, signal.SIGCONT)
+        except ProcessLookupError:
+            pass
+        srv.stop()
+
+
+def test_a_stalled_batch_lane_fails_readiness_not_liveness():
+    """Issue 33 finding 3: health counted any live worker. With the batch worker stopped,
+    /readyz says 503 and names the batch lane while it cannot render (stills sent here would
+    wait on it), /healthz stays 200 (the streams' lane renders), and both are 200 again once
+    the stalled worker is replaced."""
+    import os
+    import signal
+    srv = Server().start()
+    pid = _lane_pid(srv.url, "batch")
+    try:
+        os.kill(pid, signal.SIGSTOP)
+        t0, seen = time.monotonic(), []
+        while time.monotonic() - t0 < 40:
+            h, r = get(srv.url + "/healthz", timeout=5), get(srv.url + "/readyz", timeout=5)
+            seen.append((round(time.monotonic() - t0, 1), h[0], r[0], json.loads(r[2]).get("reason")))
+            if any(s[2] == 503 for s in seen) and r[0] == 200:
+                break
+            time.sleep(0.3)
+        print("\n(s, healthz, readyz, reason):", [s for s in seen if s[2] == 503][:1], seen[-1])
+        assert all(s[1] == 200 for s in seen)
+        failing = [s for s in seen if s[2] == 503]
+        assert failing and failing[0][3] == "the batch lane cannot render"
+        assert seen[-1][1:3] == (200, 200)
+        assert _lane_pid(srv.url, "batch") != pid
+    finally:
+        try:
+            os.kill(pid, signal.SIGCONT)
+        except ProcessLookupError:
+            pass
+        srv.stop()

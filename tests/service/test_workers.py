@@ -214,3 +214,51 @@ def test_a_frame_that_drew_the_full_shadow_map_did_work_once():
         return [await once(sun(40.0), False), await once(sun(40.0), False), await once(sun(41.0), True),
                 await once(sun(42.0), True)]
     assert run(body, Settings()) == [True, False, False, False]
+
+
+def test_a_deadline_tells_a_stalled_worker_from_a_busy_one():
+    """Issue 33 finding 2: a job past its deadline on a worker that used no CPU (asleep,
+    stopped) is the server's fault (DeadlineExceeded.stalled); one that kept a core busy is
+    the job's. Measured by the worker's CPU time from /proc, sampled while it has jobs."""
+    async def body(sup: Supervisor):
+        slot = sup.interactive.slots[0]
+        with pytest.raises(DeadlineExceeded) as idle:
+            await sup.call(slot, worker.sleep, 30.0, deadline=3.0)
+        await sup.call(slot, worker.probe, deadline=30, queue_s=60)   # the replacement is up
+        with pytest.raises(DeadlineExceeded) as busy:
+            await sup.call(slot, faults.spin, 30.0, deadline=3.0)
+        return idle.value, busy.value
+    idle, busy = run(body, Settings(probe_interval_s=0.5))
+    print(f"\ncores used: asleep {idle.cpu_share}, spinning {busy.cpu_share}")
+    assert idle.stalled is True and idle.cpu_share < 0.2
+    assert "stalled" in str(idle) and idle.retry_after == 2
+    assert busy.stalled is False and busy.cpu_share > 0.5
+    assert "took over 3 s" in str(busy) and busy.retry_after == 5
+
+
+def test_a_stopped_worker_with_jobs_waiting_is_replaced_and_its_callers_told_at_once():
+    """A worker stopped between jobs takes none: the callers waited the queue's 30 s (a
+    stream saw no frame for 34 s). Now it is replaced once it has used no CPU for
+    STALL_WINDOW_S with jobs waiting, and the waiting callers get a WorkerError then."""
+    async def body(sup: Supervisor):
+        slot = sup.interactive.slots[0]
+        await sup.call(slot, worker.probe, deadline=30, queue_s=60)
+        old = slot.pid
+        os.kill(old, signal.SIGSTOP)
+        try:
+            t0 = time.monotonic()
+            with pytest.raises(WorkerError) as lost:
+                await sup.call(slot, worker.probe, deadline=30)
+            waited = time.monotonic() - t0
+            out = await sup.call(slot, worker.probe, deadline=30, queue_s=60)
+        finally:
+            try:
+                os.kill(old, signal.SIGCONT)
+            except ProcessLookupError:
+                pass
+        return waited, str(lost.value), old, out["pid"]
+    waited, msg, old, new = run(body, Settings(probe_interval_s=0.5))
+    print(f"\nthe waiting call was told after {waited:.1f} s: {msg}")
+    assert waited < 8.0            # was the queue's 30 s
+    assert "stalled and was replaced" in msg
+    assert new != old

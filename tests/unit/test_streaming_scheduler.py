@@ -169,3 +169,64 @@ def test_no_second_frame_until_a_full_frame_at_the_level_is_measured():
     job = draw(t + 0.4, 20.0)
     assert job.full is True and job.level == s.refine_level
     assert st.queue_room(c, t + 0.5) == 2
+
+
+class _Failing:
+    """A supervisor whose every frame fails with `exc`."""
+
+    def __init__(self, exc):
+        self.exc = exc
+
+    async def call(self, *args, **kwargs):
+        raise self.exc
+
+
+class _Socket:
+    def __init__(self):
+        self.sent = []
+
+    async def send_text(self, text):
+        import json
+        self.sent.append(json.loads(text))
+
+
+def _fail_frames(exc, n):
+    """A still session (one full frame owed) whose frames fail with `exc`, `n` times:
+    (the messages it was sent, its session after)."""
+    import asyncio
+    st = Streamer(workers=_Failing(exc))
+    c = _client(st, "a")
+    c.ws = _Socket()
+    c.session.last_full = True   # its frame is drawn: a failed one is owed again only if redone
+    c.session.dirty = True
+
+    async def go():
+        for i in range(n):
+            job = c.session.start_frame(float(i))
+            st.frames[0] = 1
+            await st._produce(c, job)
+    asyncio.run(go())
+    return c.ws.sent, c.session
+
+
+def test_a_frame_lost_to_a_stalled_worker_is_drawn_again_and_the_session_not_paused():
+    """Issue 33 finding 2: a deadline on a worker that made no progress paused the session
+    and blamed the look."""
+    from fogbank.stream.streaming import STALL_RETRIES
+    from fogbank.workers.supervisor import DeadlineExceeded
+    sent, s = _fail_frames(DeadlineExceeded("stalled", stalled=True, cpu_share=0.0), 1)
+    assert [m["type"] for m in sent] == ["error"]
+    assert "stalled" in sent[0]["msg"] and "paused" not in sent[0]["msg"]
+    assert s.stalled != s.version and s.wants_frame(1.0) is True     # owed again, not paused
+    # a worker that seems stalled every time is not killed forever: past STALL_RETRIES in a
+    # row the session is paused all the same, and the message says why
+    sent, s = _fail_frames(DeadlineExceeded("stalled", stalled=True, cpu_share=0.0), STALL_RETRIES + 1)
+    assert s.stalled == s.version and s.wants_frame(9.0) is False
+    assert "stalled on" in sent[-1]["msg"] and "paused" in sent[-1]["msg"]
+
+
+def test_a_frame_that_kept_its_worker_busy_past_the_deadline_pauses_the_look():
+    from fogbank.workers.supervisor import DeadlineExceeded
+    sent, s = _fail_frames(DeadlineExceeded("took over", stalled=False, cpu_share=1.7), 1)
+    assert s.stalled == s.version and s.wants_frame(1.0) is False
+    assert "took over" in sent[-1]["msg"] and "1.7 cores" in sent[-1]["msg"]

@@ -453,8 +453,9 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         return out
 
     @app.get("/healthz",
-                   summary="Liveness: 200 while some render worker has rendered within liveness_s",
-                   responses={503: {"description": "no worker has rendered recently: restart me"}})
+                   summary="Liveness: 200 while the interactive lane (the streams' workers) can render: a "
+                           "worker of it rendered within liveness_s, or runs a job without stalling",
+                   responses={503: {"description": "the interactive lane cannot render: restart me"}})
     async def healthz():
         sup: Supervisor | None = state.get("workers")
         if sup is None:
@@ -463,7 +464,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         info = sup.info
         body = {"status": "ok" if live else "failing", "renderer": info.get("renderer"),
                 "gl_version": info.get("version"), "last_render_s": round(age, 3),
-                "queue": sup.queue_depth(), "workers": sup.status()}
+                "lanes": sup.lanes_live(), "queue": sup.queue_depth(), "workers": sup.status()}
         return JSONResponse(body, status_code=200 if live else 503)
 
     @app.get("/readyz",
@@ -476,8 +477,10 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             return JSONResponse({"status": "starting"}, status_code=503)
         if sup.draining or state.get("draining"):
             return JSONResponse({"status": "draining"}, status_code=503)
-        if not sup.live()[0]:
-            return JSONResponse({"status": "failing"}, status_code=503)
+        down = [name for name, ok in sup.lanes_live().items() if not ok]
+        if down:   # a lane that cannot render: stills or streams sent here would wait on it
+            return JSONResponse({"status": "failing", "reason": f"the {' and '.join(down)} lane cannot render",
+                                 "lanes": sup.lanes_live()}, status_code=503)
         if len(streamer.clients) >= settings.max_sessions:
             return JSONResponse({"status": "busy", "reason": "sessions full"}, status_code=503)
         if state["stills"] >= settings.max_stills:

@@ -674,6 +674,11 @@ class Session:
             if not fresh(i - 1) or self.preview_costs[i - 1][0] <= budget:
                 self.preview_rung = i - 1
 
+    def redo(self) -> None:
+        """A frame was lost to the server, not to the look (its worker stalled or died):
+        draw the look again, whether or not its time runs."""
+        self.dirty = True
+
     def frame_done(self, job: FrameJob, sent: bool) -> None:
         """A frame was sent (or dropped: failed, stale, or the client left)."""
         self.making -= 1

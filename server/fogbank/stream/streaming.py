@@ -9,9 +9,12 @@ is a snapshot of its session (latest wins); the worker renders and JPEG-encodes 
 the bytes go out as header + JPEG. A session never has more than MAX_IN_FLIGHT frames
 unacknowledged, so a slow client gets fewer frames, never older ones.
 
-A frame past its deadline kills its worker (the supervisor's rule); the session that
-asked for it is paused and told why, so one too-costly look cannot keep killing the
-worker that every other session shares. Sessions that go quiet (no message for
+A frame past its deadline kills its worker (the supervisor's rule). When the worker was
+busy with it throughout, the look is too costly: the session that asked for it is paused
+and told why, so one such look cannot keep killing the worker that every other session
+shares. When the worker made no progress (stopped, hung: DeadlineExceeded.stalled), the
+server is to blame: the session is told, and its frame is drawn again on the
+replacement (up to STALL_RETRIES times in a row). Sessions that go quiet (no message for
 `idle_timeout_s`) or stop acknowledging (`ack_timeout_s`) are closed with code 4408 and
 a reason the page shows.
 """
@@ -44,6 +47,10 @@ log = logging.getLogger("fogbank.stream")
 IDLE_CLOSE = 4408   # closed for inactivity (no messages, or frames left unacknowledged)
 SHARE_RECENT_S = 1.0   # a playing session that started a frame this recently shares its worker (Streamer.sharing)
 QUEUE_MAX_MS = 60.0   # a frame costlier than this is never queued behind another (Streamer.queue_room)
+# frames of one session that may miss their deadline in a row on a stalled worker and be
+# drawn again; past this the session is paused all the same (a worker that seems stalled
+# each time, e.g. one waiting on a GPU without using the CPU, must not be killed forever)
+STALL_RETRIES = 2
 
 
 class Client:
@@ -56,6 +63,7 @@ class Client:
         self.closed = False
         self.last_message = now
         self.unacked_since: float | None = None   # oldest frame sent and not yet acknowledged
+        self.stalls = 0   # frames in a row that missed their deadline on a stalled worker
 
     async def send_json(self, msg: dict[str, Any]) -> None:
         # ASCII JSON: user text echoed in an error (a field name, a value) may hold lone
@@ -218,6 +226,7 @@ class Streamer:
                 self.frames[slot.index] -= 1
                 self.wake()
             render_ms, encode_ms = out["render_ms"], out["encode_ms"]
+            client.stalls = 0
             s.measured(job, render_ms, self.clock(), once=bool(out.get("once")),
                        scene_reused=out.get("scene_reused"), scene_warped=bool(out.get("scene_warped")))
             metrics.RENDER_MS.observe(render_ms)
@@ -240,17 +249,41 @@ class Streamer:
                 metrics.FRAMES.inc()
         except DeadlineExceeded as exc:
             metrics.ERRORS.labels("frame_deadline").inc()
-            log.warning("frame past its deadline; session paused", extra={"session": s.id, "frame": job.frame})
+            deadline = self.settings.frame_deadline_s
+            if exc.stalled and client.stalls < STALL_RETRIES:
+                client.stalls += 1
+                s.redo()
+                log.warning("frame's worker stalled; drawn again on its replacement",
+                            extra={"session": s.id, "frame": job.frame, "cpu_share": exc.cpu_share})
+                await self._tell(client, {"type": "error", "retry_after": exc.retry_after,
+                                          "msg": f"the renderer stalled during frame {job.frame} (it made no "
+                                                 f"progress for {deadline:g} s) and was replaced; the stream "
+                                                 "goes on"})
+                return
+            log.warning("frame past its deadline; session paused",
+                        extra={"session": s.id, "frame": job.frame, "cpu_share": exc.cpu_share})
             s.pause(self.clock())
             await self._tell(client, s.state(self.clock()))
+            if exc.stalled:
+                why = (f"the renderer stalled on {client.stalls + 1} frames of this look in a row (each over "
+                       f"{deadline:g} s with no progress), so the stream is paused; change the look or "
+                       "press play to try again")
+            else:
+                busy = "" if exc.cpu_share is None else f" (the renderer busy throughout: {exc.cpu_share:.1f} cores)"
+                why = (f"this look took over {deadline:g} s a frame{busy}, so the stream is paused: make it "
+                       "cheaper (fewer or cheaper layers, fewer volume samples, a larger effects.fog_scale or "
+                       "a smaller view)")
+            client.stalls = 0
             await self._tell(client, {"type": "error", "loc": ["params"], "retry_after": exc.retry_after,
-                                      "msg": f"this look took over {self.settings.frame_deadline_s:g} s a frame, "
-                                             "so the stream is paused: make it cheaper (fewer or cheaper layers, "
-                                             "fewer volume samples, a larger effects.fog_scale or a smaller view)"})
+                                      "msg": why})
         except Exception as exc:  # noqa: BLE001 - one frame fails, the session goes on
             metrics.ERRORS.labels("frame").inc()
             log.warning("frame failed", extra={"session": s.id, "frame": job.frame, "error": str(exc)})
             msg = str(exc) if isinstance(exc, WorkerError) else f"{type(exc).__name__}: {exc}"
+            if isinstance(exc, WorkerError) and exc.status == 503 and client.stalls < STALL_RETRIES:
+                client.stalls += 1   # the worker died or was replaced: the frame again, on the new one
+                s.redo()
+                msg += "; it is drawn again"
             await self._tell(client, {"type": "error", "msg": f"frame {job.frame} failed: {msg}"})
         finally:
             s.frame_done(job, sent)

@@ -24,6 +24,7 @@ import multiprocessing
 import os
 import threading
 import time
+from collections import deque
 from concurrent.futures import CancelledError as FutureCancelled
 from concurrent.futures.process import BrokenProcessPool
 from concurrent.futures import TimeoutError as FutureTimeout
@@ -40,6 +41,28 @@ from fogbank.workers import proctree
 from fogbank.workers import worker
 
 log = logging.getLogger("fogbank.workers")
+
+# A worker that runs a job yet uses under this share of a core over STALL_WINDOW_S makes no
+# progress: it is stalled (stopped, swapped out, hung in a call), not busy. A render keeps
+# at least one core busy (llvmpipe's raster threads; a GPU driver that waits spins or
+# takes its own share); a worker stopped by SIGSTOP uses none.
+STALL_CPU_SHARE = 0.2
+STALL_WINDOW_S = 3.0
+
+
+def cpu_stat(pid: int | None) -> tuple[float, str] | None:
+    """(CPU time used by process `pid` and its threads, user + system, s; its state letter:
+    R runnable, S sleeping, T stopped, ...), from /proc; None where there is no such
+    process or no /proc."""
+    if not pid:
+        return None
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as f:
+            fields = f.read().rsplit(b")", 1)[1].split()
+    except (OSError, IndexError):
+        return None
+    # after the command's ")": field 3 (state) is fields[0], utime (14) and stime (15) 11 and 12
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK"), fields[0].decode()
 
 
 @lru_cache(maxsize=1)
@@ -61,7 +84,14 @@ class WorkerError(Exception):
 
 
 class DeadlineExceeded(WorkerError):
-    pass
+    """A job ran past its deadline. `stalled`: its worker made no progress (Supervisor.
+    cpu_share under STALL_CPU_SHARE), so the server, not the job, is to blame; None when
+    that could not be measured. `cpu_share`: the cores it used over the job."""
+
+    def __init__(self, msg: str, stalled: bool | None = None, cpu_share: float | None = None, **kw):
+        super().__init__(msg, **kw)
+        self.stalled = stalled
+        self.cpu_share = cpu_share
 
 
 class QueueTimeout(WorkerError):
@@ -83,6 +113,25 @@ class Slot:
     probing: bool = False
     started: float = field(default_factory=time.monotonic)
     compiled: set = field(default_factory=lambda: {warm_variant()})   # fog programs it has drawn
+    # (monotonic s, CPU s, state) of its worker process, sampled each probe interval while
+    # it has jobs (Supervisor.sample_cpu); cleared when the process changes
+    cpu: deque = field(default_factory=lambda: deque(maxlen=256))
+    cpu_pid: int | None = None
+    busy_since: float | None = None   # since when it has had jobs in flight (queued or running)
+    generation: int = 0   # counts hard replacements: the jobs of a killed worker are lost
+    down_since: float | None = None   # killed or replaced then, and not rendered since
+
+    def worker_pid(self) -> int | None:
+        """The pid of the slot's worker process as its pool knows it now (a replaced
+        worker's before its first job reports it), else the last one a job reported."""
+        try:   # pebble keeps its workers by pid; read defensively, its manager thread edits it
+            pids = list(self.pool._pool_manager.worker_manager.workers)
+        except (AttributeError, RuntimeError):
+            pids = []
+        return pids[0] if pids else self.pid
+
+    def running(self) -> bool:
+        return any(f.running() for f in self.inflight)
 
     def drew(self, key: tuple) -> None:
         """Remember a variant this worker compiled (a rough mirror of its program cache:
@@ -123,6 +172,9 @@ class Lane:
         if expected is not None and slot.pool is not expected:
             return
         old = slot.pool
+        if hard:
+            slot.generation += 1   # its jobs' callers give up on them now (Supervisor.call)
+            slot.down_since = time.monotonic()
         slot.pool = self._pool()
         slot.pid = None
         slot.compiled = {warm_variant()}
@@ -203,15 +255,25 @@ class Supervisor:
             slot.jobs -= 1
             lane.recycle(slot, "broken", expected=pool)
             raise WorkerError("the renderer process was being replaced; retry", retry_after=2) from None
+        if not slot.inflight:
+            slot.busy_since = t0
         slot.inflight.add(fut)
         try:
             # asyncio.wait, not wait_for: since Python 3.11 a wait_for timeout and pebble's
             # deadline are the same TimeoutError class, and they must be told apart
             waiter = asyncio.wrap_future(fut)
-            done, _ = await asyncio.wait({waiter}, timeout=queue_s + deadline)
+            end, generation = t0 + queue_s + deadline, slot.generation
+            while True:   # until done, past the wait's end, or the worker was replaced under it
+                done, _ = await asyncio.wait({waiter}, timeout=max(0.0, min(0.5, end - time.monotonic())))
+                if done or time.monotonic() >= end or slot.generation != generation:
+                    break
             if not done:
                 waiter.cancel()
                 fut.cancel()   # pebble kills the worker if the job had started
+                if slot.generation != generation:
+                    metrics.ERRORS.labels("worker_replaced").inc()
+                    raise WorkerError(f"the {slot.lane} renderer stalled and was replaced; retry",
+                                      retry_after=2)
                 metrics.ERRORS.labels("queue_timeout").inc()
                 since = max(slot.last_ok, slot.started + self.settings.worker_start_s)
                 if not any(f.running() for f in slot.inflight) and time.monotonic() - since > queue_s:
@@ -224,16 +286,28 @@ class Supervisor:
                                    f"{queue_s + deadline:g} s", retry_after=5)
             out = waiter.result()
         except FutureTimeout:
-            slot.started = time.monotonic()   # pebble starts a new worker: give it time to start
+            now = time.monotonic()
+            # how much of a core the worker used while the job ran (pebble has killed it by
+            # now; the samples are the probe loop's): none means it stalled
+            share = self.cpu_share(slot, max(t0, now - deadline - 3.0), now)
+            stalled = None if share is None else share < STALL_CPU_SHARE
+            slot.started = now   # pebble starts a new worker: give it time to start
+            slot.down_since = now
             slot.compiled = {warm_variant()}
             metrics.DEADLINE_KILLS.labels(slot.lane).inc()
-            metrics.WORKER_RESTARTS.labels(slot.lane, "deadline").inc()
+            metrics.WORKER_RESTARTS.labels(slot.lane, "stalled" if stalled else "deadline").inc()
             log.warning("job past its deadline; worker killed",
                         extra={"lane": slot.lane, "worker": slot.index, "deadline_s": deadline,
-                               "job": getattr(fn, "__name__", str(fn))})
-            raise DeadlineExceeded(f"rendering took over {deadline:g} s and was stopped", retry_after=5) from None
+                               "job": getattr(fn, "__name__", str(fn)), "cpu_share": share,
+                               "stalled": stalled})
+            if stalled:
+                raise DeadlineExceeded(f"the {slot.lane} renderer stalled (it used {share:.2f} of a core "
+                                       f"for {deadline:g} s) and was replaced; retry", stalled=True,
+                                       cpu_share=share, retry_after=2) from None
+            raise DeadlineExceeded(f"rendering took over {deadline:g} s and was stopped", stalled=stalled,
+                                   cpu_share=share, retry_after=5) from None
         except ProcessExpired as exc:
-            slot.started = time.monotonic()
+            slot.started = slot.down_since = time.monotonic()
             slot.compiled = {warm_variant()}
             metrics.WORKER_RESTARTS.labels(slot.lane, "died").inc()
             log.error("worker died during a job", extra={"lane": slot.lane, "worker": slot.index,
@@ -249,8 +323,11 @@ class Supervisor:
         finally:
             slot.jobs -= 1
             slot.inflight.discard(fut)
+            if not slot.inflight:
+                slot.busy_since = None
         now = time.monotonic()
         slot.last_ok = now
+        slot.down_since = None
         if out.get("pid") and slot.pid != out["pid"]:
             slot.pid = out["pid"]
         slot.rss = out.get("rss", slot.rss)
@@ -266,9 +343,21 @@ class Supervisor:
         s = self.settings
         loop = asyncio.get_running_loop()
         while True:
-            await asyncio.sleep(s.probe_interval_s)
+            await asyncio.sleep(min(s.probe_interval_s, 1.0))
             now = time.monotonic()
             for slot in self.slots():
+                self.sample_cpu(slot, now)
+                if not slot.running() and self.stalled(slot, now):
+                    # jobs wait and the worker takes none, using no CPU (stopped, hung):
+                    # replaced now, not after the queue's timeout (30 s). A stalled worker
+                    # that runs a job is left to the job's deadline, which also tells the
+                    # job's owner whom to blame (DeadlineExceeded.stalled)
+                    log.error("worker stalled with jobs waiting; replacing it",
+                              extra={"lane": slot.lane, "worker": slot.index})
+                    lane = self.interactive if slot.lane == "interactive" else self.batch
+                    slot.cpu.clear()
+                    lane.recycle(slot, "stalled", hard=True)
+                    continue
                 if not slot.probing and now - slot.last_ok > s.probe_interval_s:
                     slot.probing = True
                     loop.create_task(self._probe(slot))
@@ -284,18 +373,72 @@ class Supervisor:
         finally:
             slot.probing = False
 
+    def sample_cpu(self, slot: Slot, now: float) -> None:
+        """Note the CPU time of the slot's worker while it has jobs (forgotten when it has
+        none: call() reads a job's samples before it lets the job go)."""
+        if not slot.inflight:
+            slot.cpu.clear()
+            return
+        pid = slot.worker_pid()
+        if pid != slot.cpu_pid:
+            slot.cpu.clear()
+            slot.cpu_pid = pid
+        stat = cpu_stat(pid)
+        if stat is not None:
+            slot.cpu.append((now, *stat))
+
+    def cpu_share(self, slot: Slot, since: float, until: float) -> float | None:
+        """The cores the slot's worker used on average between `since` and `until`, from
+        its samples; None with fewer than two samples 1 s apart in that span (no /proc, a
+        job too short to sample)."""
+        pts = [(t, c) for t, c, _ in slot.cpu if since <= t <= until]
+        if len(pts) < 2 or pts[-1][0] - pts[0][0] < 1.0:
+            return None
+        return (pts[-1][1] - pts[0][1]) / (pts[-1][0] - pts[0][0])
+
+    def stalled(self, slot: Slot, now: float) -> bool:
+        """The slot has had jobs in flight for STALL_WINDOW_S, its worker used under
+        STALL_CPU_SHARE of a core over that time (a worker with a job is running it, or
+        starting, which takes CPU too), and it is not waiting for a core (state R: on a
+        machine loaded 10 deep a runnable worker gets 0.2 cores)."""
+        if slot.busy_since is None or now - slot.busy_since < STALL_WINDOW_S or not slot.cpu:
+            return False
+        share = self.cpu_share(slot, now - STALL_WINDOW_S - 0.5, now)
+        return share is not None and share < STALL_CPU_SHARE and slot.cpu[-1][2] != "R"
+
+    def slot_live(self, slot: Slot, now: float) -> bool:
+        """The slot can render: it rendered (a probe or a job) within `liveness_s`, or it
+        runs a job and is not stalled; and it has rendered since its worker was last
+        killed or replaced (a new worker takes seconds to start and warm up)."""
+        if slot.down_since is not None or self.stalled(slot, now):
+            return False
+        return now - slot.last_ok <= self.settings.liveness_s or slot.running()
+
+    def lane_live(self, lane: Lane, now: float | None = None) -> bool:
+        now = time.monotonic() if now is None else now
+        return any(self.slot_live(s, now) for s in lane.slots)
+
     def live(self) -> tuple[bool, float]:
-        """Alive when some worker rendered (a probe or a job) within `liveness_s`;
-        also returns the age of the freshest success."""
+        """Alive when the interactive lane can render (some worker of it rendered within
+        `liveness_s`, or runs a job without stalling): streams, the main job, need it, and
+        the supervisor replaces a stuck worker well before a liveness probe's failure
+        threshold runs out. A batch lane that cannot render fails readiness only
+        (lanes_live). Also returns the age of the freshest success of any worker."""
         now = time.monotonic()
         age = min((now - s.last_ok for s in self.slots()), default=float("inf"))
-        return age <= self.settings.liveness_s, age
+        return self.lane_live(self.interactive, now), age
+
+    def lanes_live(self) -> dict[str, bool]:
+        """Each lane's name: whether it can render (lane_live)."""
+        now = time.monotonic()
+        return {lane.name: self.lane_live(lane, now) for lane in self.lanes}
 
     def status(self) -> list[dict[str, Any]]:
         now = time.monotonic()
         return [{"lane": s.lane, "worker": s.index, "pid": s.pid, "rss_mb": round(s.rss / 2**20, 1),
                  "jobs": s.jobs, "sessions": s.sessions,
-                 "last_ok_s": round(now - s.last_ok, 2) if s.last_ok else None}
+                 "last_ok_s": round(now - s.last_ok, 2) if s.last_ok else None,
+                 "live": self.slot_live(s, now), "stalled": self.stalled(s, now)}
                 for s in self.slots()]
 
     def queue_depth(self) -> int:
