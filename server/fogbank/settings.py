@@ -60,7 +60,11 @@ class Settings(BaseSettings):
     stills_cache_mb: int = Field(64, ge=0, le=65536, description="encoded stills kept for repeats, MiB")
     max_sessions: int = Field(32, ge=1, le=10000, description="streaming sessions per process; "
                               "the next is refused with close code 1013")
-    max_stills: int = Field(4, ge=1, le=256, description="still renders at once; beyond, 503")
+    max_stills: int = Field(4, ge=1, le=256, description="distinct still renders at once; more wait "
+                            "(up to max_queued_stills, and queue_timeout_s each), then 503. Requests "
+                            "for a still already rendering wait for that render (single flight)")
+    max_queued_stills: int = Field(64, ge=0, le=100000, description="distinct stills that may wait "
+                                   "for one of max_stills places; beyond, 503 with Retry-After")
     messages_per_s: float = Field(120.0, gt=0, description="per-socket message rate (token bucket)")
     message_burst: int = Field(240, ge=1, description="per-socket burst of messages")
     max_sessions_per_client: int = Field(8, ge=1, le=10000, description="streaming sessions one "

@@ -242,7 +242,8 @@ def _metric(server: Server, name: str) -> float:
 def test_timed_out_and_busy_renders_are_not_replayed_nor_mark_replicas_down():
     """A render stopped at its deadline was replayed on every replica (ups=503, 503); a
     burst of 12 heavy stills marked both replicas down and /healthz got 502 for 5.6 s."""
-    replicas = [Server(env={"FOGBANK_RENDER_TIMEOUT_S": "1.5", "FOGBANK_MAX_STILLS": "2"}).start()
+    replicas = [Server(env={"FOGBANK_RENDER_TIMEOUT_S": "1.5", "FOGBANK_MAX_STILLS": "2",
+                            "FOGBANK_MAX_QUEUED_STILLS": "0"}).start()
                 for _ in range(2)]
     lb = Nginx([r.port for r in replicas]).start()
     try:

@@ -106,13 +106,14 @@ def test_metrics(client):
 
 
 def test_concurrent_stills_beyond_the_cap_get_503():
-    """A real server with FOGBANK_MAX_STILLS=1: of four simultaneous big stills, the ones
-    that find it busy get 503 with Retry-After; none fail otherwise."""
+    """A real server with FOGBANK_MAX_STILLS=1 and FOGBANK_MAX_QUEUED_STILLS=1: of four
+    simultaneous big stills, one renders, one waits for it, and the ones that find both
+    places taken get 503 with Retry-After; none fail otherwise."""
     import socket
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
-    env = {**os.environ, "FOGBANK_MAX_STILLS": "1"}
+    env = {**os.environ, "FOGBANK_MAX_STILLS": "1", "FOGBANK_MAX_QUEUED_STILLS": "1"}
     proc = subprocess.Popen([sys.executable, "-m", "fogbank.cli", "serve", "--port", str(port)],
                             env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     try:

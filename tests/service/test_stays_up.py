@@ -420,3 +420,44 @@ def test_a_stalled_batch_lane_fails_readiness_not_liveness():
         except ProcessLookupError:
             pass
         srv.stop()
+
+
+def _metric(url: str, name: str) -> float:
+    text = get(url + "/metrics")[2].decode()
+    return sum(float(line.rsplit(" ", 1)[1]) for line in text.splitlines()
+               if line.startswith(name) and not line.startswith("#"))
+
+
+def test_identical_stills_are_rendered_once_and_a_burst_waits_instead_of_failing():
+    """Issue 33 finding 5: 200 concurrent GETs of one uncached still made 4 renders and 196
+    answers of 503. Now one render serves them all (single flight); a burst of distinct
+    stills beyond max_stills waits for a place; past max_queued_stills it is 503."""
+    from concurrent.futures import ThreadPoolExecutor
+    srv = Server(env={"FOGBANK_MAX_QUEUED_STILLS": "6"}).start()
+    try:
+        url = srv.url + "/api/still.jpg?width=480&height=270&time=7.25"
+        before = _metric(srv.url, "fogbank_stills_total")
+        with ThreadPoolExecutor(200) as pool:
+            got = list(pool.map(lambda _: get(url, timeout=120), range(200)))
+        renders = _metric(srv.url, "fogbank_stills_total") - before
+        statuses = sorted({g[0] for g in got})
+        print(f"\n200 identical GETs: statuses {statuses}, {renders:.0f} render(s), "
+              f"slowest {max(g[1] for g in got):.1f} s")
+        assert statuses == [200]
+        assert len({g[2] for g in got}) == 1 and got[0][2][:2] == b"\xff\xd8"
+        assert renders == 1
+        # 10 distinct stills at once: 4 render, 6 wait, none refused
+        with ThreadPoolExecutor(10) as pool:
+            burst = list(pool.map(lambda i: get(srv.url + f"/api/still.jpg?width=320&height=180&time={i}.5",
+                                                timeout=120)[0], range(10)))
+        assert burst == [200] * 10
+        # 16 more: 4 render, 6 wait, the other 6 are told to retry
+        with ThreadPoolExecutor(16) as pool:
+            over = list(pool.map(lambda i: get(srv.url + f"/api/still.jpg?width=320&height=180&time={i}.75",
+                                               timeout=120), range(16)))
+        refused = [json.loads(o[2])["detail"] for o in over if o[0] == 503]
+        print(f"16 distinct at once: {sum(o[0] == 200 for o in over)} rendered, {len(refused)} refused")
+        assert sum(o[0] == 200 for o in over) >= 10 and len(refused) >= 1
+        assert all("FOGBANK_MAX_QUEUED_STILLS" in r for r in refused)
+    finally:
+        srv.stop()

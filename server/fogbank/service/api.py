@@ -199,7 +199,10 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         info = await sup.start()
         log.info("renderer: %s", info)
         state["cache"] = StillCache(settings.stills_cache_mb << 20)
-        state["stills"] = 0
+        state["stills"] = 0            # renders of distinct stills under way
+        state["stills_waiting"] = 0    # distinct stills waiting for one of max_stills places
+        state["still_slots"] = asyncio.Semaphore(settings.max_stills)
+        state["flights"] = {}          # ETag -> the task rendering it (single flight)
         state["streamer"] = Streamer(sup, frames_per_worker=settings.frames_per_worker, settings=settings)
         state["streamer"].start()
         state["ready"] = True
@@ -279,26 +282,54 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         cached = state["cache"].get(etag)
         if cached is not None:
             return Response(cached, media_type=MEDIA_TYPES[fmt], headers=headers)
-        slot, c = _route(still, fmt)
-        refusal = _over_budget(c, settings, "this still")
-        if refusal is not None:
-            metrics.ERRORS.labels("cost").inc()
-            raise RequestValidationError([dict(e, loc=[loc, *e["loc"][1:]]) for e in refusal.errors()])
-        if state["stills"] >= settings.max_stills:
+        flights: dict[str, asyncio.Task] = state["flights"]
+        flight = flights.get(etag)
+        if flight is None:   # the first ask for this still: checked, then rendered in a task of its own
+            slot, c = _route(still, fmt)
+            refusal = _over_budget(c, settings, "this still")
+            if refusal is not None:
+                metrics.ERRORS.labels("cost").inc()
+                raise RequestValidationError([dict(e, loc=[loc, *e["loc"][1:]]) for e in refusal.errors()])
+            if state["stills"] + state["stills_waiting"] >= settings.max_stills + settings.max_queued_stills:
+                metrics.ERRORS.labels("busy").inc()
+                raise HTTPException(503, f"{settings.max_stills} stills are rendering and "
+                                    f"{settings.max_queued_stills} wait (FOGBANK_MAX_QUEUED_STILLS); retry shortly",
+                                    headers={"Retry-After": "2"})
+            state["stills_waiting"] += 1   # counted now: the task may not run before the next ask
+            flight = asyncio.get_running_loop().create_task(_render_still(still, fmt, slot, etag))
+            flights[etag] = flight
+            flight.add_done_callback(lambda t, k=etag: (flights.pop(k, None), t.cancelled() or t.exception()))
+        else:
+            metrics.COALESCED.inc()
+        # every asker of one still awaits its one render (single flight); shielded, so that
+        # an asker who leaves does not cancel it for the others
+        out = await asyncio.shield(flight)
+        headers["Server-Timing"] = f'render;dur={out["render_ms"]:.1f}, encode;dur={out["encode_ms"]:.1f}'
+        return Response(out["data"], media_type=MEDIA_TYPES[fmt], headers=headers)
+
+    async def _render_still(still: StillParams, fmt: str, slot, etag: str) -> dict:
+        """One distinct still: a place among max_stills (waiting up to queue_timeout_s),
+        then its worker job; the result cached. It is counted in stills_waiting already."""
+        try:
+            await asyncio.wait_for(state["still_slots"].acquire(), settings.queue_timeout_s)
+        except asyncio.TimeoutError:
             metrics.ERRORS.labels("busy").inc()
-            raise HTTPException(503, f"{settings.max_stills} stills are rendering; retry shortly",
-                                headers={"Retry-After": "2"})
+            raise HTTPException(503, f"this still waited {settings.queue_timeout_s:g} s for one of "
+                                f"{settings.max_stills} places to render; retry shortly",
+                                headers={"Retry-After": "5"}) from None
+        finally:
+            state["stills_waiting"] -= 1
         state["stills"] += 1
         try:
             out = await _job(slot, worker.still, still, fmt, deadline=settings.render_timeout_s)
             slot.drew(cost.program_key(still))
         finally:
             state["stills"] -= 1
+            state["still_slots"].release()
         metrics.STILLS.labels(fmt).inc()
         metrics.RENDER_MS.observe(out["render_ms"])
-        headers["Server-Timing"] = f'render;dur={out["render_ms"]:.1f}, encode;dur={out["encode_ms"]:.1f}'
         state["cache"].put(etag, out["data"])
-        return Response(out["data"], media_type=MEDIA_TYPES[fmt], headers=headers)
+        return out
 
     @app.get("/api/still.{fmt}", summary="Render a still from URL params",
              responses={200: {"content": {m: {} for m in MEDIA_TYPES.values()}},

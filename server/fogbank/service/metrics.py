@@ -10,6 +10,8 @@ _MS = (2, 5, 10, 20, 35, 50, 75, 100, 150, 250, 500, 1000, 2500, 5000)
 
 FRAMES = Counter("fogbank_frames_total", "stream frames sent", registry=REGISTRY)
 STILLS = Counter("fogbank_stills_total", "stills rendered", ["format"], registry=REGISTRY)
+COALESCED = Counter("fogbank_stills_coalesced_total", "still requests answered by a render another "
+                    "request of the same still had started", registry=REGISTRY)
 RENDER_MS = Histogram("fogbank_render_ms", "render time of a frame or still, ms", buckets=_MS,
                       registry=REGISTRY)
 ENCODE_MS = Histogram("fogbank_encode_ms", "encode time of a stream frame, ms", buckets=_MS,
