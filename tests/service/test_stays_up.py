@@ -76,12 +76,22 @@ def test_a_still_past_its_deadline_is_a_503_and_the_service_goes_on():
         assert status == 503
         assert headers["Retry-After"] == "5"
         assert "took over 1.5 s" in json.loads(body)["detail"]
+        assert "asked again, it is refused (422)" in json.loads(body)["detail"]
         assert took < 6.0                                   # stopped, not waited out
         assert get(srv.url + "/healthz")[0] == 200
         assert get(srv.url + "/api/still.jpg?width=160&height=90&time=4")[0] == 200
         text = get(srv.url + "/metrics")[2].decode()
         assert 'fogbank_deadline_kills_total{lane="batch"} 1.0' in text
         assert 'fogbank_worker_restarts_total{lane="batch",why="deadline"} 1.0' in text
+        # issue 33 finding 4: asked again, the same still cost another worker and another 503
+        # (its Retry-After invited it); now it is refused at once, naming what to reduce
+        t0 = time.monotonic()
+        status, _, body = post_still(srv.url, HEAVY)
+        assert status == 422 and time.monotonic() - t0 < 2.0
+        msg = json.loads(body)["detail"][0]["msg"]
+        assert "stopped at its deadline of 1.5 s" in msg and "layers[0] (noise, volume, 128 samples)" in msg
+        text = get(srv.url + "/metrics")[2].decode()
+        assert 'fogbank_deadline_kills_total{lane="batch"} 1.0' in text     # no second kill
     finally:
         srv.stop()
 

@@ -99,7 +99,11 @@ def sample(rng):
                  drift=tuple(rng.uniform(-3, 3, 3)) if rng.random() < 0.5 else (0.0, 0.0, 0.0))
 
 
-NOISE_SAMPLE_S_PER_MPX = 0.022   # volume mode, per sample along the ray
+# volume mode, per sample along the ray and megapixel of fog target, with the default 64^3
+# tile (fog scale 2, 32 and 128 samples: 0.053 at 960x540, 0.068 at 640x360; workers/cost.py
+# adds a larger tile's cache misses). It was 0.022, and a still of two such layers
+# estimated at 19.7 s took over 30 s (issue 33); tests/gl/test_cost.py holds the corners
+NOISE_SAMPLE_S_PER_MPX = 0.07
 
 
 def extra_seconds(layer, fog_mpx):

@@ -38,7 +38,7 @@ from fogbank.model.suggest import suggest_layer
 from fogbank.model.layer_profile import KINDS_EDITED, profile
 from fogbank.model.fields import RAY_LIMIT, Direction, Int, Position, Strict
 from fogbank.service.security import SecurityHeaders, origin_allowed
-from fogbank.workers.supervisor import Supervisor, WorkerError
+from fogbank.workers.supervisor import DeadlineExceeded, Supervisor, WorkerError
 from fogbank.settings import Settings, get_settings
 from fogbank.stream.streaming import Streamer, websocket_endpoint
 from fogbank.model.urlstate import URLError, decode, shareable
@@ -166,8 +166,21 @@ class StillCache:
             self.size -= len(self.items.popitem(last=False)[1])
 
 
-def _over_budget(c: cost.Cost, settings: Settings, what: str) -> RequestValidationError | None:
-    """A 422 naming what to reduce, when `c` is beyond the still budgets."""
+TOO_COSTLY_KEPT = 4096   # stills remembered as stopped at their deadline (least recent out)
+
+
+def _over_budget(c: cost.Cost, settings: Settings, what: str,
+                 stopped_at: float | None = None) -> RequestValidationError | None:
+    """A 422 naming what to reduce, when `c` is beyond the still budgets, or when this
+    still was stopped at its deadline of `stopped_at` s before (it would be again: asking
+    once more must not cost another worker)."""
+    if stopped_at is not None:
+        return RequestValidationError([errors.error(
+            ["body"], f"{what} was stopped at its deadline of {stopped_at:g} s when it was asked before "
+            f"(estimated at {c.seconds:.1f} s), so it is refused. Reduce what costs most: " + "; ".join(
+                f"{k} ~{c.parts[k]:.1f} s" for k in c.biggest())
+            + " (fewer or cheaper layers, fewer volume samples, a larger effects.fog_scale, "
+              "or fewer pixels)", "cost")])
     if c.memory > settings.still_memory_mb << 20:
         return RequestValidationError([errors.error(
             ["body", "width"], f"{what} needs about {c.memory / 2**20:.0f} MiB of render targets; "
@@ -203,6 +216,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         state["stills_waiting"] = 0    # distinct stills waiting for one of max_stills places
         state["still_slots"] = asyncio.Semaphore(settings.max_stills)
         state["flights"] = {}          # ETag -> the task rendering it (single flight)
+        state["too_costly"] = OrderedDict()   # ETags of stills stopped at their deadline (refused after)
         state["streamer"] = Streamer(sup, frames_per_worker=settings.frames_per_worker, settings=settings)
         state["streamer"].start()
         state["ready"] = True
@@ -237,14 +251,22 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         return JSONResponse({"detail": exc.detail}, status_code=exc.status_code,
                             headers=getattr(exc, "headers", None))
 
-    async def _job(slot, fn, *args, deadline: float):
+    async def _job(slot, fn, *args, deadline: float, remember: str | None = None):
         """A worker job for a request; worker trouble becomes 503 + Retry-After (or the
-        job's own error, 500, for a fault in the renderer's code)."""
+        job's own error, 500, for a fault in the renderer's code). `remember`: the key under
+        which a job that kept its worker busy to the deadline is kept in too_costly."""
         try:
             return await state["workers"].call(slot, fn, *args, deadline=deadline)
         except WorkerError as exc:
             metrics.ERRORS.labels("busy" if exc.status == 503 else "render").inc()
-            raise HTTPException(exc.status, str(exc), headers={"Retry-After": str(exc.retry_after)}) from None
+            msg = str(exc)
+            if remember and isinstance(exc, DeadlineExceeded) and not exc.stalled:
+                costly = state["too_costly"]
+                costly[remember] = deadline
+                while len(costly) > TOO_COSTLY_KEPT:
+                    costly.popitem(last=False)
+                msg += "; asked again, it is refused (422): make it cheaper"
+            raise HTTPException(exc.status, msg, headers={"Retry-After": str(exc.retry_after)}) from None
         except Exception as exc:  # noqa: BLE001 - a renderer fault fails this request only
             metrics.ERRORS.labels("render").inc()
             log.error("render failed", extra={"error": f"{type(exc).__name__}: {exc}"})
@@ -286,7 +308,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         flight = flights.get(etag)
         if flight is None:   # the first ask for this still: checked, then rendered in a task of its own
             slot, c = _route(still, fmt)
-            refusal = _over_budget(c, settings, "this still")
+            refusal = _over_budget(c, settings, "this still", state["too_costly"].get(etag))
             if refusal is not None:
                 metrics.ERRORS.labels("cost").inc()
                 raise RequestValidationError([dict(e, loc=[loc, *e["loc"][1:]]) for e in refusal.errors()])
@@ -321,7 +343,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             state["stills_waiting"] -= 1
         state["stills"] += 1
         try:
-            out = await _job(slot, worker.still, still, fmt, deadline=settings.render_timeout_s)
+            out = await _job(slot, worker.still, still, fmt, deadline=settings.render_timeout_s, remember=etag)
             slot.drew(cost.program_key(still))
         finally:
             state["stills"] -= 1

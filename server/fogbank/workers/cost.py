@@ -66,9 +66,30 @@ class Cost:
         return [k for k, v in sorted(self.parts.items(), key=lambda kv: -kv[1])[:n] if v > 0]
 
 
-def _layer_seconds(layer, fog_mpx: float) -> float:
+# A noise tile larger than the default 64^3 misses the caches more at every sample: at
+# 960x540, 128 volume samples of a 128^3 tile took 1.4 times those of a 64^3 one (1.29 s
+# against 0.93 s; scripts/cost_corners.py)
+NOISE_TILE_FACTOR_PER_DOUBLING = 0.4
+# toward the sun (effects.sun_through_fog) each layer is integrated again from every
+# surface over sky_distance: 1.25 times its view ray's cost for 128 volume samples
+SUN_LAYER_FACTOR = 1.3
+# each froxel of the light grid marches its slice through every layer, and toward the sun
+# from it when lit: per layer, about 4 fog texels' cost lit and 1 unlit (960x540, 128
+# volume samples, "medium": +1.2 s lit and +0.34 s with shafts only, over 32.6k froxels)
+LIGHT_LAYER_TEXELS = {True: 4.0, False: 1.2}
+
+
+def noise_tile_factor(size: int) -> float:
+    """How much more a noise sample costs with a `size`^3 tile than with the default 64^3."""
+    import math
+    return 1.0 + NOISE_TILE_FACTOR_PER_DOUBLING * max(0.0, math.log2(size / 64))
+
+
+def _layer_seconds(layer, fog_mpx: float, tile: float = 1.0) -> float:
+    """A layer's fog-pass seconds over `fog_mpx` megapixels; `tile`: the noise tile's
+    factor (noise_tile_factor), for the kinds that sample it."""
     kind = KINDS[layer.kind]
-    return kind.seconds_per_mpx * fog_mpx + kind.extra_seconds(layer, fog_mpx)
+    return kind.seconds_per_mpx * fog_mpx + kind.extra_seconds(layer, fog_mpx) * (tile if kind.uses_noise else 1.0)
 
 
 def program_key(still: StillParams) -> tuple:
@@ -110,19 +131,20 @@ def estimate(still: StillParams, msaa: bool = True, fmt: str = "jpg", scale: flo
         parts["effects.blur"] = BLUR_S_PER_MPX * mpx
     drawn = [(i, layer) for i, layer in enumerate(still.layers)
              if layer.enabled and not (fog_held and not changes_with_time(layer, still))]
+    noise_tile = noise_tile_factor(still.noise.size)
     for i, layer in drawn:
-        parts[f"layers[{i}] ({KINDS[layer.kind].describe(layer)})"] = _layer_seconds(layer, fog_mpx)
+        parts[f"layers[{i}] ({KINDS[layer.kind].describe(layer)})"] = _layer_seconds(layer, fog_mpx, noise_tile)
     if e.sun_through_fog:   # every layer again, along the sun's direction, and the attachment
-        parts["effects.sun_through_fog"] = SUNLIGHT_S_PER_MPX * mpx + sum(
-            _layer_seconds(layer, fog_mpx) for _, layer in drawn)
+        parts["effects.sun_through_fog"] = SUNLIGHT_S_PER_MPX * mpx + SUN_LAYER_FACTOR * sum(
+            _layer_seconds(layer, fog_mpx, noise_tile) for _, layer in drawn)
     if lights(still):
         tile, slices, taps = grid_shape(still)
         froxels = -(-still.width // tile) * -(-still.height // tile) * slices
         # a still camera's grid holds the layers that do not move and the shadows
         shadow = taps * SHADOW_TAP_S if e.shafts > 0 and not fog_held else 0.0
         parts["effects.lit, effects.shafts (the light grid)"] = froxels * (LIGHT_S_PER_FROXEL + shadow) + \
-            froxels / 1e6 * (2 if e.lit else 1) * sum(_layer_seconds(layer, 1.0) for _, layer in drawn
-                                                      if not KINDS[layer.kind].quads)
+            froxels / 1e6 * LIGHT_LAYER_TEXELS[bool(e.lit)] * sum(
+                _layer_seconds(layer, 1.0, noise_tile) for _, layer in drawn if not KINDS[layer.kind].quads)
     # a held fog of moving layers filters its volume noise each frame; with none, the held
     # fog is the filtered fog target itself
     filtered = jittered(still) and (bool(drawn) or not fog_held)
