@@ -132,12 +132,20 @@ class Nginx:
     """Debian's nginx with docker/nginx/fogbank.conf in front of `upstreams`, every path
     (pid, logs, temp) inside a temp dir."""
 
-    def __init__(self, upstreams: list[int]):
+    def __init__(self, upstreams: list[int], read_timeout_s: int | None = None):
+        """`read_timeout_s`: the config's proxy_read_timeout values replaced by this (a
+        test of failover need not wait the 65 s the app's longest answer needs)."""
         self.port = free_port()
         self.url = f"http://127.0.0.1:{self.port}"
         self.dir = Path(tempfile.mkdtemp(prefix="fogbank-nginx-"))
         servers = "\n".join(f"        server 127.0.0.1:{p} max_fails=3 fail_timeout=5s;" for p in upstreams)
         d = self.dir
+        conf = DOCKER / "nginx" / "fogbank.conf"
+        if read_timeout_s is not None:
+            text = conf.read_text()
+            assert "proxy_read_timeout 65s;" in text
+            conf = d / "fogbank.conf"
+            conf.write_text(text.replace("proxy_read_timeout 65s;", f"proxy_read_timeout {read_timeout_s}s;"))
         (d / "listen.conf").write_text(f"listen 127.0.0.1:{self.port};\n")
         (d / "nginx.conf").write_text(f"""
 daemon off;
@@ -155,7 +163,7 @@ http {{
     upstream fogbank {{
 {servers}
     }}
-    include {DOCKER}/nginx/fogbank.conf;
+    include {conf};
 }}
 """)
         self.proc: subprocess.Popen | None = None

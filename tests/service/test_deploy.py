@@ -48,6 +48,24 @@ def test_compose_and_kubernetes_manifests():
     ann = docs["ingress"]["metadata"]["annotations"]
     assert int(ann["nginx.ingress.kubernetes.io/proxy-read-timeout"]) >= 3600
     assert docs["service"]["spec"]["selector"] == {"app": "fogbank"}
+    # issue 33 finding 6: "*" trusted any client's X-Forwarded-For; each config now trusts
+    # only its proxy (compose: nginx's fixed address; k8s: the pod CIDR, which the network
+    # policy opens to the ingress controller alone)
+    fog = compose["services"]["fogbank"]
+    nginx_ip = compose["services"]["nginx"]["networks"]["fog"]["ipv4_address"]
+    assert fog["environment"]["FOGBANK_FORWARDED_ALLOW_IPS"] == nginx_ip
+    import ipaddress
+    subnet = compose["networks"]["fog"]["ipam"]["config"][0]["subnet"]
+    assert ipaddress.ip_address(nginx_ip) in ipaddress.ip_network(subnet)
+    env = {e["name"]: e["value"] for e in c["env"]}
+    assert "*" not in env["FOGBANK_FORWARDED_ALLOW_IPS"]
+    ipaddress.ip_network(env["FOGBANK_FORWARDED_ALLOW_IPS"])
+    pol = docs["networkpolicy"]["spec"]
+    assert pol["podSelector"]["matchLabels"] == {"app": "fogbank"} and pol["policyTypes"] == ["Ingress"]
+    assert pol["ingress"][0]["from"][0]["namespaceSelector"]["matchLabels"] == {
+        "kubernetes.io/metadata.name": "ingress-nginx"}
+    conf = (DOCKER / "nginx" / "fogbank.conf").read_text()
+    assert "$proxy_add_x_forwarded_for" not in conf and conf.count("X-Forwarded-For $remote_addr;") == 3
 
 
 @pytest.fixture(scope="module")
@@ -308,3 +326,65 @@ def test_a_still_whose_replica_dies_is_served_by_another():
         lb.stop()
         for r in replicas:
             r.stop(signal.SIGKILL)
+
+
+def test_the_per_client_cap_holds_through_nginx_with_forged_addresses():
+    """Issue 33 finding 6: with the replicas trusting any proxy ("*") and nginx appending
+    to the client's X-Forwarded-For, 24 of 24 sessions with forged addresses were accepted
+    from one client. nginx now sets the header to the address it sees, and the replica
+    trusts nginx alone (here 127.0.0.1, nginx's address and, on loopback, the client's
+    too): a cap of 3 holds whatever address the client claims."""
+    srv = Server(env={"FOGBANK_MAX_SESSIONS_PER_CLIENT": "3", "FOGBANK_FORWARDED_ALLOW_IPS": "127.0.0.1"}).start()
+    lb = Nginx([srv.port]).start()
+    try:
+        async def one(i: int):
+            headers = {"X-Forwarded-For": f"203.0.113.{i}", "X-Real-IP": f"203.0.113.{i}"}
+            async with websockets.connect(lb.url.replace("http", "ws", 1) + "/ws",
+                                          additional_headers=headers) as ws:
+                first = json.loads(await ws.recv())
+                if first["type"] == "hello":
+                    await asyncio.sleep(2.0)          # hold the session while the others try
+                    return "open"
+                try:
+                    await ws.recv()
+                except websockets.ConnectionClosed as exc:
+                    return exc.rcvd.code if exc.rcvd else None
+
+        async def burst():
+            return await asyncio.gather(*(one(i) for i in range(8)))
+        got = run_async(burst())
+        assert sorted(got, key=str) == sorted(["open"] * 3 + [1013] * 5, key=str)
+    finally:
+        lb.stop()
+        srv.stop()
+
+
+def test_a_frozen_replica_is_passed_over():
+    """Issue 33 finding 7: with one replica's web process stopped, 4 of 40 stills through
+    nginx hung 7-25 s (a 120 s read timeout, and only connection errors failed over). A
+    replica that says nothing for longer than the app's longest answer is now passed over
+    (`proxy_next_upstream timeout`; 65 s in the config, 4 s here so the test need not wait
+    the app's longest answer) and marked down for fail_timeout."""
+    import os
+    from concurrent.futures import ThreadPoolExecutor
+    replicas = [Server().start(), Server().start()]
+    lb = Nginx([r.port for r in replicas], read_timeout_s=4).start()
+    frozen = replicas[1]
+    os.kill(frozen.proc.pid, signal.SIGSTOP)
+    try:
+        def one(i):
+            t0 = time.monotonic()
+            with urllib.request.urlopen(lb.url + f"/api/still.jpg?width=160&height=90&time={i}.5",
+                                        timeout=60) as r:
+                return r.status, time.monotonic() - t0, r.read()[:2]
+        with ThreadPoolExecutor(8) as pool:
+            got = list(pool.map(one, range(20)))
+        slowest = max(g[1] for g in got)
+        print(f"\n20 stills with a replica frozen: statuses {sorted({g[0] for g in got})}, slowest {slowest:.1f} s")
+        assert all(g[0] == 200 and g[2] == b"\xff\xd8" for g in got)
+        assert slowest < 4 + 10.0          # at most one read timeout, then the live replica
+    finally:
+        os.kill(frozen.proc.pid, signal.SIGCONT)
+        lb.stop()
+        for r in replicas:
+            r.stop()

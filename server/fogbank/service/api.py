@@ -251,12 +251,12 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         return JSONResponse({"detail": exc.detail}, status_code=exc.status_code,
                             headers=getattr(exc, "headers", None))
 
-    async def _job(slot, fn, *args, deadline: float, remember: str | None = None):
+    async def _job(slot, fn, *args, deadline: float, remember: str | None = None, queue_s: float | None = None):
         """A worker job for a request; worker trouble becomes 503 + Retry-After (or the
         job's own error, 500, for a fault in the renderer's code). `remember`: the key under
         which a job that kept its worker busy to the deadline is kept in too_costly."""
         try:
-            return await state["workers"].call(slot, fn, *args, deadline=deadline)
+            return await state["workers"].call(slot, fn, *args, deadline=deadline, queue_s=queue_s)
         except WorkerError as exc:
             metrics.ERRORS.labels("busy" if exc.status == 503 else "render").inc()
             msg = str(exc)
@@ -330,8 +330,12 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         return Response(out["data"], media_type=MEDIA_TYPES[fmt], headers=headers)
 
     async def _render_still(still: StillParams, fmt: str, slot, etag: str) -> dict:
-        """One distinct still: a place among max_stills (waiting up to queue_timeout_s),
-        then its worker job; the result cached. It is counted in stills_waiting already."""
+        """One distinct still: a place among max_stills, then its worker job, waiting for
+        both at most queue_timeout_s in all (so that every still is answered within
+        queue_timeout_s + render_timeout_s: the proxy's read timeout is set above that,
+        docker/nginx/fogbank.conf); the result cached. It is counted in stills_waiting
+        already."""
+        t0 = asyncio.get_running_loop().time()
         try:
             await asyncio.wait_for(state["still_slots"].acquire(), settings.queue_timeout_s)
         except asyncio.TimeoutError:
@@ -343,7 +347,9 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             state["stills_waiting"] -= 1
         state["stills"] += 1
         try:
-            out = await _job(slot, worker.still, still, fmt, deadline=settings.render_timeout_s, remember=etag)
+            waited = asyncio.get_running_loop().time() - t0
+            out = await _job(slot, worker.still, still, fmt, deadline=settings.render_timeout_s, remember=etag,
+                             queue_s=max(0.5, settings.queue_timeout_s - waited))
             slot.drew(cost.program_key(still))
         finally:
             state["stills"] -= 1
