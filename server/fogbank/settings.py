@@ -70,6 +70,12 @@ class Settings(BaseSettings):
     max_sessions_per_client: int = Field(8, ge=1, le=10000, description="streaming sessions one "
                                          "client address may hold (a classroom behind one NAT shares "
                                          "an address); the next is refused with 1013")
+    yield_after_s: float = Field(20.0, gt=0, le=86400, description="a session paused (time "
+                                 "stopped, no drag) that has sent nothing this long gives its place to a new "
+                                 "session when the server or its address is full (closed with 4408; the page "
+                                 "resumes it on the next input)")
+    silent_yield_s: float = Field(5.0, gt=0, le=3600, description="a session that has sent no message "
+                                  "this long after connecting gives its place likewise")
     idle_timeout_s: float = Field(300.0, gt=0, le=86400, description="a WebSocket that sends nothing "
                                   "this long is closed (code 4408)")
     ack_timeout_s: float = Field(30.0, gt=0, le=3600, description="a WebSocket that leaves frames "

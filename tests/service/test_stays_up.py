@@ -471,3 +471,75 @@ def test_identical_stills_are_rendered_once_and_a_burst_waits_instead_of_failing
         assert all("FOGBANK_MAX_QUEUED_STILLS" in r for r in refused)
     finally:
         srv.stop()
+
+
+def test_sessions_that_render_nothing_give_their_place_to_new_ones():
+    """Issue 33 finding 6: 32 sockets from 32 addresses that never send a message held all
+    32 sessions until the 30 s ack timeout (a new client refused with 1013 all that time),
+    and paused sessions held theirs for the 300 s idle timeout. Admission now counts render
+    capacity: when full, the session quiet longest without rendering (silent past
+    silent_yield_s, or paused and quiet past yield_after_s) is closed with 4408 and a
+    reason, and the newcomer is let in; sessions that play are never closed for it."""
+    srv = Server(env={"FOGBANK_MAX_SESSIONS": "3", "FOGBANK_SILENT_YIELD_S": "2",
+                      "FOGBANK_YIELD_AFTER_S": "3"}).start()
+    ws_url = srv.url.replace("http", "ws", 1) + "/ws?v=1&time=3"
+
+    async def closed_with(ws) -> tuple:
+        try:
+            while True:
+                await asyncio.wait_for(ws.recv(), 10)
+        except websockets.ConnectionClosed as exc:
+            return (exc.rcvd.code, exc.rcvd.reason) if exc.rcvd else (None, "")
+
+    async def newcomer() -> str:
+        async with websockets.connect(ws_url) as ws:
+            first = json.loads(await ws.recv())
+            return first["type"] if first["type"] == "hello" else first["msg"]
+
+    async def silent():
+        socks = [await websockets.connect(ws_url) for _ in range(3)]
+        for s in socks:
+            assert json.loads(await s.recv())["type"] == "hello"
+        assert "full" in await newcomer()                  # within silent_yield_s: refused
+        await asyncio.sleep(2.5)
+        assert await newcomer() == "hello"
+        codes = await asyncio.gather(*(closed_with(s) for s in socks[:1]))
+        for s in socks:
+            await s.close()
+        return codes
+
+    async def paused_and_playing():
+        async def viewer(play: bool, seconds: float):
+            ws = await websockets.connect(ws_url)
+            await ws.recv(), await ws.recv()
+            await ws.send(json.dumps({"type": "view", "width": 64, "height": 36, "fps": 10}))
+            await ws.send(json.dumps({"type": "play", "playing": play}))
+            t0 = time.monotonic()
+            while time.monotonic() - t0 < seconds:
+                try:
+                    m = await asyncio.wait_for(ws.recv(), 0.3)
+                except asyncio.TimeoutError:
+                    continue
+                except websockets.ConnectionClosed as exc:
+                    return ("closed", exc.rcvd.code if exc.rcvd else None, exc.rcvd.reason if exc.rcvd else "")
+                if isinstance(m, bytes):
+                    await ws.send(json.dumps({"type": "ack", "frame": int.from_bytes(m[4:8], "little")}))
+            await ws.close()
+            return ("open",)
+
+        async def late():
+            await asyncio.sleep(4.5)
+            return await newcomer()
+        return await asyncio.gather(viewer(False, 8), viewer(True, 8), viewer(True, 8), late())
+
+    try:
+        codes = run_async(silent())
+        assert codes[0][0] == 4408 and "without a message" in codes[0][1]
+        time.sleep(1.0)
+        paused, playing1, playing2, late = run_async(paused_and_playing())
+        print(f"\nsilent: {codes}; paused: {paused}; playing: {playing1}, {playing2}; newcomer: {late}")
+        assert late == "hello"
+        assert paused[:2] == ("closed", 4408) and "paused" in paused[2]
+        assert playing1 == playing2 == ("open",)
+    finally:
+        srv.stop()

@@ -64,6 +64,8 @@ class Client:
         self.last_message = now
         self.unacked_since: float | None = None   # oldest frame sent and not yet acknowledged
         self.stalls = 0   # frames in a row that missed their deadline on a stalled worker
+        self.spoke = False   # has sent a message
+        self.connected = now
 
     async def send_json(self, msg: dict[str, Any]) -> None:
         # ASCII JSON: user text echoed in an error (a field name, a value) may hold lone
@@ -108,6 +110,35 @@ class Streamer:
 
     def per_client(self, addr: str) -> int:
         return sum(1 for c in self.clients.values() if c.addr == addr)
+
+    def idle_for(self, c: Client, now: float) -> float | None:
+        """How long `c` has held its place without using the renderer, when that is long
+        enough for it to give the place up (else None): a session that never sent a message
+        after `silent_yield_s`, or one paused (time stopped, no drag) and quiet after
+        `yield_after_s`. It costs a socket, not a render slot."""
+        cfg = self.settings
+        if not c.spoke:
+            quiet = now - c.connected
+            return quiet if quiet >= cfg.silent_yield_s else None
+        if c.session.playing or c.session.previewing(now):
+            return None
+        quiet = now - c.last_message
+        return quiet if quiet >= cfg.yield_after_s else None
+
+    def make_room(self, now: float, addr: str | None = None) -> Client | None:
+        """Admission by render capacity, not by sockets: when the server (or the address
+        `addr`) is full, the session that has held its place longest without rendering
+        (idle_for) gives it up: removed now, and returned so that the caller closes its
+        socket (4408, resumed by the page on the next input). None: no session can yield."""
+        idle = [(q, c) for c in self.clients.values() if (addr is None or c.addr == addr)
+                and (q := self.idle_for(c, now)) is not None]
+        if not idle:
+            return None
+        quiet, victim = max(idle, key=lambda qc: qc[0])
+        metrics.ERRORS.labels("yielded").inc()
+        log.info("session yielded its place", extra={"session": victim.session.id, "quiet_s": round(quiet, 1)})
+        self.remove(victim)
+        return victim
 
     def add(self, client: Client) -> None:
         slot = self.workers.interactive.least_loaded("sessions")
@@ -345,21 +376,42 @@ class TokenBucket:
         return True
 
 
+def _room(streamer: Streamer, now: float, addr: str | None, yielded: list) -> bool:
+    victim = streamer.make_room(now, addr)
+    if victim is not None:
+        yielded.append(victim)
+    return victim is not None
+
+
+async def _yield(c: Client, now: float) -> None:
+    quiet = now - (c.last_message if c.spoke else c.connected)
+    reason = (f"gave its place to a new session after {quiet:.0f} s "
+              + ("without a message" if not c.spoke else "paused"))
+    try:
+        await c.ws.close(code=IDLE_CLOSE, reason=reason)
+    except Exception:  # noqa: BLE001 - already gone
+        pass
+
+
 async def websocket_endpoint(ws: WebSocket, streamer: Streamer, renderer_info: dict) -> None:
     """/ws?<look query>: one session. See protocol.py for the messages."""
     cfg = streamer.settings
     await ws.accept()
     addr = ws.client.host if ws.client else "?"
     refusal = None
+    yielded: list[Client] = []
     # check and register with no await in between: sessions connecting at once must not
     # all pass the caps before any of them is counted
-    if len(streamer.clients) >= cfg.max_sessions:
-        metrics.ERRORS.labels("sessions_full").inc()
-        refusal = f"the server is full ({cfg.max_sessions} sessions); retry in a few seconds"
-    elif streamer.per_client(addr) >= cfg.max_sessions_per_client:
+    now = streamer.clock()
+    if streamer.per_client(addr) >= cfg.max_sessions_per_client and not _room(streamer, now, addr, yielded):
         metrics.ERRORS.labels("sessions_per_client").inc()
         refusal = (f"this address already has {cfg.max_sessions_per_client} sessions open; close one "
                    "(another tab or window) or retry later")
+    elif len(streamer.clients) >= cfg.max_sessions and not _room(streamer, now, None, yielded):
+        metrics.ERRORS.labels("sessions_full").inc()
+        refusal = f"the server is full ({cfg.max_sessions} sessions); retry in a few seconds"
+    for c in yielded:
+        asyncio.get_running_loop().create_task(_yield(c, now))
     if refusal:
         await ws.send_json({"type": "error", "msg": refusal, "retry_after": 5})
         await ws.close(code=1013, reason="try again later")
@@ -396,6 +448,7 @@ async def websocket_endpoint(ws: WebSocket, streamer: Streamer, renderer_info: d
                 await ws.close(code=1009, reason=f"message over {MAX_MESSAGE} bytes")
                 break
             client.last_message = streamer.clock()
+            client.spoke = True
             if not bucket.take(streamer.clock()):
                 metrics.ERRORS.labels("rate").inc()
                 if bucket.should_notify():
