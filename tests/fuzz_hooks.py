@@ -53,7 +53,8 @@ def _look_ok(look) -> bool:
                     return False
                 total += int(layer.get("count", 120))
             elif kind == "potential" and layer.get("shape") == "line":
-                if float(np.hypot(*layer.get("direction", [0, 1, 0]))) < 1e-6:
+                # np.hypot of the 3 values raised a TypeError, which kept the cases this meant to drop
+                if float(np.linalg.norm(np.asarray(layer.get("direction", [0, 1, 0]), dtype=np.float64))) < 1e-6:
                     return False
         except (TypeError, ValueError, AttributeError):
             return True   # not a valid look anyway: negative data, not filtered

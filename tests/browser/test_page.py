@@ -58,6 +58,14 @@ def test_page_runs_under_its_csp(server, browser):
     with urllib.request.urlopen(server.url + "/") as r:
         csp = r.headers["Content-Security-Policy"]
     assert "script-src 'self'" in csp and "unsafe-inline" not in csp and "unsafe-eval" not in csp
+    # issue 33 finding 9: connect-src allowed ws: and wss: to any host; 'self' alone carries
+    # the page's own stream (above) and refuses a socket to another host
+    assert "connect-src 'self';" in csp and " ws:" not in csp and " wss:" not in csp
+    page.evaluate("() => { try { new WebSocket('ws://127.0.0.2:9/') } catch (e) { return e.name } }")
+    deadline = time.monotonic() + 5
+    while not violations and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert any("127.0.0.2" in v and "connect-src" in v for v in violations)
     page.context.close()
 
 

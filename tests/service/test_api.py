@@ -36,6 +36,12 @@ def test_still_is_deterministic_with_etag_and_304(client):
     assert client.get(q, headers={"If-None-Match": a.headers["etag"]}).status_code == 304
     other = client.get("/api/still.png?width=200&height=100&camera.yaw=13&time=3")
     assert other.headers["etag"] != a.headers["etag"]
+    # issue 33 finding 9: a weak tag, a list and "*" were ignored (the still sent again)
+    tag = a.headers["etag"]
+    for header in (f"W/{tag}", f'"nope", {tag}', f'W/"nope" , W/{tag}', "*"):
+        assert client.get(q, headers={"If-None-Match": header}).status_code == 304
+    for header in ('"nope"', 'W/"nope", "other"', tag[:-2] + '"'):
+        assert client.get(q, headers={"If-None-Match": header}).status_code == 200
 
 
 def test_post_still_matches_get(client):

@@ -42,3 +42,13 @@ def test_schemathesis_all_checks_fixed_seed(tmp_path):
     assert r.returncode == 0, out[-6000:]
     assert m and m.group(1) == m.group(2) and int(m.group(1)) >= 100, out[-2000:]
     print(f"\nschemathesis: {m.group(1)} cases generated, {m.group(2)} passed")
+
+
+def test_the_hooks_filter_drops_a_line_potential_without_a_direction():
+    """Issue 33 finding 9: the filter called np.hypot with the direction's three values,
+    got a TypeError, took the look for invalid anyway and kept the cases it meant to drop."""
+    from fuzz_hooks import _look_ok
+    line = {"kind": "potential", "shape": "line"}
+    assert _look_ok({"layers": [{**line, "direction": [0.0, 0.0, 0.0]}]}) is False
+    assert _look_ok({"layers": [{**line, "direction": [0.0, 0.0, 1e-9]}]}) is False
+    assert _look_ok({"layers": [{**line, "direction": [0.0, 0.6, 0.8]}]}) is True

@@ -543,3 +543,22 @@ def test_sessions_that_render_nothing_give_their_place_to_new_ones():
         assert playing1 == playing2 == ("open",)
     finally:
         srv.stop()
+
+
+def test_a_socket_closed_right_after_its_handshake_logs_no_error(server):
+    """Issue 33 finding 9: each socket closed right after the WebSocket handshake logged an
+    "Exception in ASGI application" traceback (the hello went to a closed socket)."""
+    import base64
+    import os
+    before = server.logs().count("Exception in ASGI application")
+    for _ in range(5):
+        with socket.create_connection(("127.0.0.1", server.port), timeout=10) as s:
+            key = base64.b64encode(os.urandom(16)).decode()
+            s.sendall(f"GET /ws HTTP/1.1\r\nHost: 127.0.0.1:{server.port}\r\nUpgrade: websocket\r\n"
+                      f"Connection: Upgrade\r\nSec-WebSocket-Key: {key}\r\nSec-WebSocket-Version: 13\r\n\r\n".encode())
+            assert s.recv(12) == b"HTTP/1.1 101"
+    time.sleep(1.0)
+    logs = server.logs()
+    assert logs.count("Exception in ASGI application") == before
+    assert logs.count("session closed during its handshake") >= 1
+    assert get(server.url + "/healthz")[0] == 200

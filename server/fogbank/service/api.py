@@ -166,6 +166,17 @@ class StillCache:
             self.size -= len(self.items.popitem(last=False)[1])
 
 
+def none_match(header: str | None, etag: str) -> bool:
+    """Whether an If-None-Match header names `etag` (RFC 9110 13.1.2): `*`, or a list of
+    entity tags compared weakly (W/"x" matches "x"). Only an exact single tag matched before."""
+    if not header:
+        return False
+    if header.strip() == "*":
+        return True
+    ours = etag.removeprefix("W/")
+    return any(tag.strip().removeprefix("W/") == ours for tag in header.split(","))
+
+
 TOO_COSTLY_KEPT = 4096   # stills remembered as stopped at their deadline (least recent out)
 
 
@@ -299,7 +310,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         # proxy buffers for a response head (nginx, 4k by default: every still of a look
         # over ~4k characters was its 502, "no fogbank replica answered")
         headers = {"ETag": etag, "Cache-Control": "public, max-age=3600", "X-Fogbank-Query": shareable(query)}
-        if request.headers.get("if-none-match") == etag:
+        if none_match(request.headers.get("if-none-match"), etag):
             return Response(status_code=304, headers=headers)
         cached = state["cache"].get(etag)
         if cached is not None:

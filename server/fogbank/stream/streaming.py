@@ -413,8 +413,11 @@ async def websocket_endpoint(ws: WebSocket, streamer: Streamer, renderer_info: d
     for c in yielded:
         asyncio.get_running_loop().create_task(_yield(c, now))
     if refusal:
-        await ws.send_json({"type": "error", "msg": refusal, "retry_after": 5})
-        await ws.close(code=1013, reason="try again later")
+        try:
+            await ws.send_json({"type": "error", "msg": refusal, "retry_after": 5})
+            await ws.close(code=1013, reason="try again later")
+        except WebSocketDisconnect:
+            pass   # it left first
         return
     now = streamer.clock()
     bucket = TokenBucket(cfg.messages_per_s, cfg.message_burst, now)
@@ -431,6 +434,10 @@ async def websocket_endpoint(ws: WebSocket, streamer: Streamer, renderer_info: d
                                 "refine_budget_ms": REFINE_BUDGET_MS, "play_budget_ms": PLAY_BUDGET_MS})
         for out in initial:
             await client.send_json(out)
+    except WebSocketDisconnect:   # the client left during the handshake: nothing went wrong here
+        streamer.remove(client)
+        log.info("session closed during its handshake", extra={"session": session.id})
+        return
     except Exception:
         streamer.remove(client)
         raise
