@@ -4,6 +4,9 @@ from pathlib import Path
 import pytest
 
 os.environ.setdefault("FOGBANK_GL_BACKEND", "egl")
+# Starlette's TestClient sends Host "testserver" (its WebSockets always): the in-process
+# apps answer it besides the default names (service/security.py HostCheck)
+os.environ.setdefault("FOGBANK_ALLOWED_HOSTS", "localhost,127.0.0.1,::1,testserver")
 
 # Tests mirror the package by tier: tests/<tier>/test_<module>.py. The folder is the
 # marker, so `pytest -m unit` runs the fast tier (no GL context, no server, no browser).

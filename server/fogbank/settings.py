@@ -89,6 +89,11 @@ class Settings(BaseSettings):
     forwarded_allow_ips: str = Field("127.0.0.1", description="proxies whose X-Forwarded-For/-Proto "
                                      "are trusted (comma-separated, or '*'): the client address that "
                                      "max_sessions_per_client counts, and the scheme the Origin check uses")
+    allowed_hosts: str = Field("localhost,127.0.0.1,::1", description="comma-separated host names "
+                               "(without port) this server answers to, besides the address it binds; '*' any. "
+                               "Others get 400 (a WebSocket, 403): a site whose name is made to resolve to "
+                               "this server (DNS rebinding) sends its own name. /healthz, /readyz and "
+                               "/metrics answer any host")
     allowed_origins: str = Field("", description="comma-separated Origins allowed on /ws besides "
                                  "the server's own host; '*' allows any")
 

@@ -247,3 +247,34 @@ def test_readyz_turns_to_draining_when_shutdown_begins():
         r = c.get("/readyz")
         assert (r.status_code, r.json()["status"]) == (503, "draining")
         assert c.get("/healthz").status_code == 200          # alive, just not taking work
+
+
+def test_other_hosts_are_refused_against_dns_rebinding(client):
+    """Issue 33 finding 9: Host and Origin evil.com:8051 (a site whose name was made to
+    resolve to this server) got 101 on /ws. Now only the allowed names are answered (the
+    defaults: localhost, 127.0.0.1, ::1); health and metrics answer any host (probes
+    address a pod by its IP)."""
+    r = client.get("/", headers={"host": "evil.com:8051"})
+    assert r.status_code == 400
+    err = r.json()["detail"][0]
+    assert err["loc"] == ["header", "host"] and "'evil.com:8051'" in err["msg"]
+    assert "FOGBANK_ALLOWED_HOSTS" in err["msg"] and "localhost" in err["msg"]
+    assert client.post("/api/still", json={}, headers={"host": "evil.com"}).status_code == 400
+    with pytest.raises(WebSocketDisconnect) as exc:
+        with client.websocket_connect("/ws", headers={"host": "evil.com:8051", "origin": "http://evil.com:8051"}) as ws:
+            ws.receive_json()
+    assert exc.value.code == 1008
+    for host in ("localhost:8000", "127.0.0.1", "[::1]:8051", "LOCALHOST"):
+        assert client.get("/api/presets", headers={"host": host}).status_code == 200
+    for path in ("/healthz", "/readyz", "/metrics"):
+        assert client.get(path, headers={"host": "10.244.3.7:8000"}).status_code == 200
+
+
+def test_allowed_hosts_add_the_bound_address_and_take_a_star():
+    from fogbank.service.security import allowed_hosts, host_allowed
+    hosts = allowed_hosts("localhost, fog.example.org", "192.168.1.5")
+    assert hosts == {"localhost", "fog.example.org", "192.168.1.5"}
+    assert allowed_hosts("localhost", "0.0.0.0") == {"localhost"}
+    assert host_allowed("fog.example.org:443", hosts) and not host_allowed("evil.org", hosts)
+    assert not host_allowed(None, hosts) and not host_allowed("[bad", hosts)
+    assert host_allowed("anything", allowed_hosts("*", "0.0.0.0"))

@@ -562,3 +562,14 @@ def test_a_socket_closed_right_after_its_handshake_logs_no_error(server):
     assert logs.count("Exception in ASGI application") == before
     assert logs.count("session closed during its handshake") >= 1
     assert get(server.url + "/healthz")[0] == 200
+
+
+def test_a_websocket_for_another_host_is_refused(server):
+    """Issue 33 finding 9, as found: Host and Origin evil.com:8051 got 101 Switching Protocols."""
+    import base64
+    import os
+    with socket.create_connection(("127.0.0.1", server.port), timeout=10) as s:
+        key = base64.b64encode(os.urandom(16)).decode()
+        s.sendall(f"GET /ws HTTP/1.1\r\nHost: evil.com:8051\r\nOrigin: http://evil.com:8051\r\nUpgrade: websocket\r\n"
+                  f"Connection: Upgrade\r\nSec-WebSocket-Key: {key}\r\nSec-WebSocket-Version: 13\r\n\r\n".encode())
+        assert s.recv(12) == b"HTTP/1.1 403"

@@ -37,7 +37,7 @@ from fogbank.model.params import LAYER_CLASSES, FogParams, StillParams
 from fogbank.model.suggest import suggest_layer
 from fogbank.model.layer_profile import KINDS_EDITED, profile
 from fogbank.model.fields import RAY_LIMIT, Direction, Int, Position, Strict
-from fogbank.service.security import SecurityHeaders, origin_allowed
+from fogbank.service.security import HostCheck, SecurityHeaders, allowed_hosts, origin_allowed
 from fogbank.workers.supervisor import DeadlineExceeded, Supervisor, WorkerError
 from fogbank.settings import Settings, get_settings
 from fogbank.stream.streaming import Streamer, websocket_endpoint
@@ -590,6 +590,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.mount("/static", StaticFiles(directory=STATIC_DIR), name="static")
     app.mount("/docs-assets", StaticFiles(directory=SWAGGER_DIR), name="docs-assets")
     app.add_middleware(SecurityHeaders)
+    app.add_middleware(HostCheck, allowed=allowed_hosts(settings.allowed_hosts, settings.host))
     app.add_middleware(RequestLimits, max_body=settings.max_body_bytes, max_url=settings.max_url_bytes,
                        max_headers=settings.max_headers, max_header_bytes=settings.max_header_bytes)
     return app

@@ -4,7 +4,10 @@ from __future__ import annotations
 
 from urllib.parse import urlsplit
 
+from starlette.datastructures import Headers
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
+
+from fogbank.model import errors
 
 # connect-src 'self' covers the page's own WebSocket (CSP Level 3 matches ws:/wss: to the
 # page's host and port under 'self'); "ws: wss:" let a script talk to any host
@@ -62,3 +65,60 @@ def origin_allowed(origin: str | None, host: str | None, allowed: str, scheme: s
     theirs = _origin_tuple(parts.scheme, parts.netloc)
     ours = _origin_tuple("https" if scheme in ("wss", "https") else "http", host or "")
     return bool(host) and theirs is not None and theirs == ours
+
+
+# probes and scrapers address a replica by its own address (a Kubernetes probe sends the
+# pod's IP as its Host): these answer whatever the Host
+UNCHECKED_PATHS = frozenset({"/healthz", "/readyz", "/metrics"})
+
+
+def allowed_hosts(listed: str, bind_host: str) -> frozenset[str]:
+    """The host names this server answers to: the comma-separated list, and the address
+    it binds unless that is every address."""
+    hosts = {h.strip().lower().strip("[]") for h in listed.split(",") if h.strip()}
+    if bind_host not in ("", "0.0.0.0", "::"):
+        hosts.add(bind_host.lower().strip("[]"))
+    return frozenset(hosts)
+
+
+def host_allowed(host: str | None, allowed: frozenset[str]) -> bool:
+    if "*" in allowed:
+        return True
+    if not host:
+        return False
+    try:
+        name = urlsplit("//" + host).hostname   # "[::1]:8000" -> "::1"
+    except ValueError:
+        return False
+    return name is not None and name.lower() in allowed
+
+
+class HostCheck:
+    """DNS rebinding guard (pure ASGI): a page of another site whose name was made to
+    resolve to this server sends its own name as Host, and Origin matches it, so the
+    Origin check passes (issue 33: Host and Origin evil.com:8051 got 101). Requests whose
+    Host is not one of the allowed names get a JSON 400 naming it; a WebSocket is refused
+    (403) before it opens."""
+
+    def __init__(self, app: ASGIApp, allowed: frozenset[str]):
+        self.app = app
+        self.allowed = allowed
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] not in ("http", "websocket") or scope.get("path") in UNCHECKED_PATHS:
+            await self.app(scope, receive, send)
+            return
+        host = Headers(scope=scope).get("host")
+        if host_allowed(host, self.allowed):
+            await self.app(scope, receive, send)
+            return
+        if scope["type"] == "websocket":
+            await send({"type": "websocket.close", "code": 1008, "reason": "host not allowed"})
+            return
+        body = errors.body_bytes([errors.error(
+            ["header", "host"], f"this server does not answer to the host {host!r}; it answers to "
+            f"{', '.join(sorted(self.allowed))} (FOGBANK_ALLOWED_HOSTS)", "host")])
+        await send({"type": "http.response.start", "status": 400,
+                    "headers": [(b"content-type", b"application/json"),
+                                (b"content-length", str(len(body)).encode())]})
+        await send({"type": "http.response.body", "body": body})
