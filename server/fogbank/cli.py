@@ -54,7 +54,8 @@ def cmd_serve(args) -> None:
     # are JPEG, which deflate does not shrink, and compressing each 1280x720 frame took the
     # web process 0.84 ms of CPU (cProfile, 374 frames), on the cores that render.
     config = uvicorn.Config(app, host=settings.host, port=settings.port, log_config=None,
-                            http=json_h11_protocol(settings.max_url_bytes),
+                            http=json_h11_protocol(settings.max_url_bytes, settings.head_timeout_s,
+                                                   settings.body_timeout_s),
                             h11_max_incomplete_event_size=MAX_HEAD_BYTES, ws="websockets",
                             ws_per_message_deflate=False,
                             ws_max_size=2 * MAX_MESSAGE, timeout_graceful_shutdown=20,

@@ -83,6 +83,11 @@ class Settings(BaseSettings):
     max_body_bytes: int = Field(2 << 20, ge=1024, le=1 << 30, description="largest request body; beyond, 413")
     max_url_bytes: int = Field(32768, ge=1024, le=1 << 20, description="longest request target "
                                "(path and query); beyond, 414")
+    head_timeout_s: float = Field(10.0, gt=0, le=3600, description="a request's line and headers "
+                                  "must arrive within this of the connection (or of the last answer on "
+                                  "it); else 408 and the connection is closed")
+    body_timeout_s: float = Field(30.0, gt=0, le=3600, description="a request's body must arrive "
+                                  "within this of its headers; else 408 and the connection is closed")
     max_headers: int = Field(100, ge=8, le=10000, description="most request headers; beyond, 431")
     max_header_bytes: int = Field(65536, ge=1024, le=1 << 20, description="largest total size of "
                                   "the request headers; beyond, 431")

@@ -573,3 +573,73 @@ def test_a_websocket_for_another_host_is_refused(server):
         s.sendall(f"GET /ws HTTP/1.1\r\nHost: evil.com:8051\r\nOrigin: http://evil.com:8051\r\nUpgrade: websocket\r\n"
                   f"Connection: Upgrade\r\nSec-WebSocket-Key: {key}\r\nSec-WebSocket-Version: 13\r\n\r\n".encode())
         assert s.recv(12) == b"HTTP/1.1 403"
+
+
+def _slow(port: int, head: bytes, then: bytes, every: float, seconds: float) -> tuple[bytes, float]:
+    """Send `head`, then `then` a byte every `every` s until the server answers or closes;
+    (what it answered, when)."""
+    t0 = time.monotonic()
+    with socket.create_connection(("127.0.0.1", port), timeout=seconds) as s:
+        s.sendall(head)
+        s.settimeout(every)
+        got = b""
+        for b in then:
+            try:
+                chunk = s.recv(4096)
+                if not chunk:
+                    break
+                got += chunk
+                break
+            except socket.timeout:
+                pass
+            try:
+                s.sendall(bytes([b]))
+            except (BrokenPipeError, ConnectionResetError):
+                break
+            if time.monotonic() - t0 > seconds:
+                break
+        s.settimeout(2)
+        try:
+            got += s.recv(4096)
+        except (socket.timeout, ConnectionResetError):
+            pass
+    return got, time.monotonic() - t0
+
+
+def test_slow_heads_and_bodies_are_timed_out():
+    """Issue 33 finding 9: slow headers and slow bodies were never timed out (20 sockets
+    held 60 s). A head must come within head_timeout_s, a body within body_timeout_s of
+    its head (2 and 3 s here), else a JSON 408 and the connection closed; a socket that
+    sends nothing is closed too. Requests within them are answered."""
+    from concurrent.futures import ThreadPoolExecutor
+    srv = Server(env={"FOGBANK_HEAD_TIMEOUT_S": "2", "FOGBANK_BODY_TIMEOUT_S": "3"}).start()
+    try:
+        port = srv.port
+        heads = b"GET /api/presets HTTP/1.1\r\nHost: 127.0.0.1\r\n"
+        with ThreadPoolExecutor(20) as pool:
+            slow_heads = list(pool.map(lambda _: _slow(port, heads, b"X-Slow: " + b"a" * 200, 0.5, 30), range(20)))
+        body_head = (b"POST /api/still HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: application/json\r\n"
+                     b"Content-Length: 400\r\n\r\n")
+        slow_body = _slow(port, body_head, b"{" + b" " * 398 + b"}", 0.5, 30)
+        silent = _slow(port, b"", b"", 1.0, 30)
+        with socket.create_connection(("127.0.0.1", port), timeout=10) as s:
+            s.settimeout(10)
+            t0 = time.monotonic()
+            s.sendall(b"")
+            quiet = s.recv(10)          # nothing sent: closed with nothing said
+            quiet_s = time.monotonic() - t0
+        print(f"\nslow heads: {sorted({g[0][:12] for g in slow_heads})}, "
+              f"longest {max(g[1] for g in slow_heads):.1f} s; slow body: {slow_body[0][:12]} "
+              f"in {slow_body[1]:.1f} s; a silent socket closed in {quiet_s:.1f} s")
+        for got, took in slow_heads:
+            assert got.startswith(b"HTTP/1.1 408") and took < 6.0
+            assert b'"request"' in got and b"within 2 s" in got
+        assert slow_body[0].startswith(b"HTTP/1.1 408") and b"body did not arrive within 3 s" in slow_body[0]
+        assert slow_body[1] < 7.0
+        assert quiet == b"" and quiet_s < 5.0
+        assert get(srv.url + "/api/presets")[0] == 200
+        # slow, but within the limits: answered
+        got, took = _slow(port, b"GET /healthz HTTP/1.1\r\nHost: 127.0.0.1\r\n", b"\r\n", 0.6, 10)
+        assert got.startswith(b"HTTP/1.1 200")
+    finally:
+        srv.stop()

@@ -11,6 +11,8 @@ with the same 414 (its length unknown: more than MAX_HEAD_BYTES), anything else 
 
 from __future__ import annotations
 
+import asyncio
+
 import base64
 import hashlib
 import re
@@ -160,15 +162,75 @@ class RequestLimits:
 _REQUEST_LINE = re.compile(rb"([A-Z]{1,16}) (/[^?\s]*)")
 
 
-def json_h11_protocol(max_url: int):
+def json_h11_protocol(max_url: int, head_timeout_s: float = 10.0, body_timeout_s: float = 30.0):
     """uvicorn's h11 protocol, answering requests it cannot parse (a request head over
     MAX_HEAD_BYTES, malformed HTTP) in JSON like every other error, not plain text; a
     request line over MAX_HEAD_BYTES is a 414, a page where a browser opened it. `max_url`
-    is the app's own limit (RequestLimits), which the answer names."""
+    is the app's own limit (RequestLimits), which the answer names.
+
+    It also times the reading of a request (uvicorn does not): its head must arrive within
+    `head_timeout_s` of the connection (or of the last response on it) and its body within
+    `body_timeout_s` of the head, else the client gets a JSON 408 and the connection is
+    closed. 20 sockets that sent a header line every few seconds held their connections
+    for as long as they liked (issue 33)."""
     import h11
     from uvicorn.protocols.http.h11_impl import H11Protocol
 
     class JSONErrorsH11(H11Protocol):
+        _read_timer: asyncio.TimerHandle | None = None
+        _reading: str | None = None   # "head" or "body": what the running timer waits for
+
+        def _arm(self, what: str, seconds: float) -> None:
+            self._disarm()
+            self._reading = what
+            self._read_timer = self.loop.call_later(seconds, self._read_timeout)
+
+        def _disarm(self) -> None:
+            if self._read_timer is not None:
+                self._read_timer.cancel()
+            self._read_timer, self._reading = None, None
+
+        def connection_made(self, transport) -> None:  # type: ignore[override]
+            super().connection_made(transport)
+            self._arm("head", head_timeout_s)
+
+        def connection_lost(self, exc) -> None:
+            self._disarm()
+            super().connection_lost(exc)
+
+        def handle_events(self) -> None:
+            super().handle_events()
+            state = self.conn.their_state
+            if state is h11.SEND_BODY:
+                if self._reading != "body":
+                    self._arm("body", body_timeout_s)
+            elif state is not h11.IDLE:   # the request is read (or the protocol switched)
+                self._disarm()
+
+        def on_response_complete(self) -> None:
+            super().on_response_complete()
+            self._arm("head", head_timeout_s)   # the next request's head, on a kept connection
+
+        def _read_timeout(self) -> None:
+            what, seconds = self._reading, head_timeout_s if self._reading == "head" else body_timeout_s
+            self._read_timer, self._reading = None, None
+            if self.transport.is_closing() or self.transport.get_protocol() is not self:
+                return   # closed, or upgraded to a WebSocket
+            if self.conn.their_state not in (h11.IDLE, h11.SEND_BODY):
+                return
+            if self.conn.their_state is h11.IDLE and not self.conn.trailing_data[0]:
+                self.transport.close()   # nothing of a request came: closed as an idle connection is
+                return
+            if self.cycle is not None and self.cycle.response_started:
+                self.transport.close()
+                return
+            body = errors.body_bytes([errors.error(
+                ["request"], f"the request's {what} did not arrive within {seconds:g} s", "timeout")])
+            self.transport.write(b"HTTP/1.1 408 Request Timeout\r\ncontent-type: application/json\r\n"
+                                 b"content-length: " + str(len(body)).encode() + b"\r\nconnection: close\r\n\r\n"
+                                 + body)
+            self.transport.close()
+
         def send_400_response(self, msg: str) -> None:
             # what h11 could not make a request of: an over-long request line has no line
             # end in it yet
