@@ -618,26 +618,37 @@ def test_sessions_that_play_on_one_worker_share_the_play_budget():
 def test_a_calibrated_level_is_held_to_its_share_by_its_steady_frames_and_its_first_by_the_whole(monkeypatch):
     """A size's first frame draws its scene pass and whole fog; the next ones reuse them
     (the camera still). With a model where every level's steady frame takes 10 ms and its
-    first 40 ms, but the full look's first 8 s (16 layers of volume noise with MSAA), a
-    calibrated session of eight on a worker (25 ms each) just after input climbs to the
-    sharpest level without MSAA, not to the full look; after QUIET_S without input, to the
-    full look; uncalibrated, it judges by the first frames, none of which fits, and takes
-    the last level."""
+    first 40 ms, but the full look's first `full_first` ms (with MSAA), a calibrated
+    session just after input climbs to the sharpest level without MSAA, not to the full
+    look; after QUIET_S without input, to the full look only if its first frames take at
+    most QUIET_FIRST_MS, and SHARED_FIRST_MS while other sessions share the worker (issue
+    33: a 16-layer volume-noise look climbed while quiet to first frames of 6.5 s, and a
+    stream beside it got 0.2 frames a second); uncalibrated, it judges by the first
+    frames, none of which fits, and takes the last level."""
     from types import SimpleNamespace
     import fogbank.workers.cost as cost
-    from fogbank.stream.session import QUIET_S
+    from fogbank.stream.session import QUIET_FIRST_MS, QUIET_S, SHARED_FIRST_MS
+
+    full_first = [0.0]
 
     def fake(still, msaa=True, scene_cached=False, fog_held=False, **_):
-        first = 8000.0 if msaa else 40.0
+        first = full_first[0] if msaa else 40.0
         return SimpleNamespace(seconds=(10.0 if scene_cached and fog_held else first) / 1000)
     monkeypatch.setattr(cost, "estimate", fake)
-    for calibrated, at, level in ((True, 1.0, 1), (True, 0.7 + QUIET_S, 0), (False, 1.0, 2 + 6)):
+    quiet = 0.7 + QUIET_S
+    assert SHARED_FIRST_MS < 800.0 < QUIET_FIRST_MS < 8000.0
+    for first, calibrated, at, share, level in ((8000.0, True, 1.0, 8, 1), (8000.0, True, quiet, 8, 1),
+                                                (8000.0, True, quiet, 1, 1), (800.0, True, quiet, 1, 0),
+                                                (800.0, True, quiet, 2, 1), (800.0, True, 1.0, 1, 1),
+                                                (8000.0, False, 1.0, 8, 2 + 6)):
+        full_first[0] = first
         s = Session("a", now=0.0)
         s.apply(msg('{"type": "view", "width": 640, "height": 360}'), 0.0)
         s.apply(msg('{"type": "params", "params": {"density": 1.1}}'), 0.7)
         s.refine_level, s.cost_ratio, s.calibrated = 2, 1.0, calibrated
         s.level_ratios = {1: (1.0, 0.0), 2: (1.0, 0.0)} if calibrated else {}
-        assert s.start_frame(at, share=8).level == level
+        assert (first, calibrated, at, share, s.start_frame(at, share=share).level) == (first, calibrated, at, share, level)
+
 
 def test_a_level_measured_costly_is_tried_again_after_its_ratio_expires():
     """Found by review: a level measured costly is not drawn again, so not measured again,

@@ -230,3 +230,38 @@ def test_a_frame_that_kept_its_worker_busy_past_the_deadline_pauses_the_look():
     sent, s = _fail_frames(DeadlineExceeded("took over", stalled=False, cpu_share=1.7), 1)
     assert s.stalled == s.version and s.wants_frame(1.0) is False
     assert "took over" in sent[-1]["msg"] and "1.7 cores" in sent[-1]["msg"]
+
+
+def test_sessions_share_a_worker_by_time_not_by_turns():
+    """Issue 33 finding 1: streams took turns frame by frame, so a look whose frames take
+    500 ms left a 20 ms stream one frame per 520 ms. By time, each gets about half the
+    worker: over 10 s of worker time the cheap stream draws about 25 frames per costly one,
+    and one that comes back from idle does not then take the worker for long."""
+    from fogbank.stream.streaming import FAIR_SLACK_MS
+    st, cheap = _streamer()
+    costly = _client(st, "b")
+    for c in (cheap, costly):
+        c.session.apply(parse('{"type": "play", "playing": true}'), 0.0)
+    cost = {"a": 20.0, "b": 500.0}
+    worker, drawn = 0.0, {"a": 0, "b": 0}
+    while worker < 10_000.0:
+        now = worker / 1000.0
+        picked, _ = st._pick(now)
+        if picked is None:
+            worker += 1.0
+            continue
+        job = picked.session.start_frame(now)
+        worker += cost[picked.session.id]
+        picked.vtime += cost[picked.session.id]
+        picked.session.frame_done(job, sent=True)
+        picked.session.apply(parse(f'{{"type": "ack", "frame": {job.frame}}}'), worker / 1000.0)
+        drawn[picked.session.id] += 1
+    print("\nframes in 10 s of worker time:", drawn)
+    assert drawn["b"] >= 8                                   # the costly look is drawn, slower
+    assert drawn["a"] >= 15 * drawn["b"]                     # turns by frame gave 1:1
+    assert 0.35 <= drawn["a"] * cost["a"] / 10_000.0 <= 0.65  # about half the worker's time
+    # a session idle while the others drew comes back FAIR_SLACK_MS ahead at most
+    idle = _client(st, "c")
+    idle.session.apply(parse('{"type": "play", "playing": true}'), 10.0)
+    st._pick(10.0)
+    assert idle.vtime >= min(cheap.vtime, costly.vtime) - FAIR_SLACK_MS - 1e-9

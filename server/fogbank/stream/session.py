@@ -108,6 +108,13 @@ HOLD_COMPILE_S = 0.6
 # not one who is about to drag (_refinement). 1920x1080's first frame with MSAA takes about
 # 500 ms, its next ones 65.
 QUIET_S = 2.0
+# ... but not without bound: a level's first frames (its scene pass and whole fog drawn)
+# may take at most this once quiet, and at most SHARED_FIRST_MS while other sessions play or
+# preview on the worker (a frame cannot be interrupted, and theirs wait for it). 16 layers
+# of volume noise at 1920x1080 climbed while quiet to 1440 px, whose first two frames took
+# 6.5 s each: a 640x360 stream on the same worker got 0.2 frames a second (issue 33)
+QUIET_FIRST_MS = 1000.0
+SHARED_FIRST_MS = 300.0
 # A refinement level's measured ratio (Session.level_ratios) is trusted this long: a level
 # measured costly is not drawn, so not measured again, and the sharper levels borrow its
 # ratio; after this the session tries them again.
@@ -528,9 +535,13 @@ class Session:
         steady = self.calibrated and bool(lr)
         quiet = now - self.last_input >= QUIET_S
 
+        first = max(whole, QUIET_FIRST_MS) if quiet else whole   # what a level's first frames may take
+        if share > 1:
+            first = min(first, SHARED_FIRST_MS)
+
         def fits(i: int, share_of_budget: float) -> bool:
             return (cost(i, steady) <= share_of_budget * budget
-                    and (not steady or quiet or cost(i, False) <= whole))
+                    and (not steady or cost(i, False) <= first))
         keep = min(self.refine_level, n - 1)
         # from a measured level, a cheaper one is taken at once; any other only next to a
         # measured one (a new session's level 0 is not measured)

@@ -51,6 +51,11 @@ QUEUE_MAX_MS = 60.0   # a frame costlier than this is never queued behind anothe
 # drawn again; past this the session is paused all the same (a worker that seems stalled
 # each time, e.g. one waiting on a GPU without using the CPU, must not be killed forever)
 STALL_RETRIES = 2
+# sessions share their worker by time: the due session whose frames have taken the least
+# worker time goes first (a costly look's frames come less often, others' do not wait a
+# turn per costly frame); one that was idle comes back at most this far ahead of the others
+# (ms), so that a session paused for a minute does not then take the worker for a second
+FAIR_SLACK_MS = 300.0
 
 
 class Client:
@@ -65,6 +70,7 @@ class Client:
         self.unacked_since: float | None = None   # oldest frame sent and not yet acknowledged
         self.stalls = 0   # frames in a row that missed their deadline on a stalled worker
         self.spoke = False   # has sent a message
+        self.vtime = 0.0     # ms of worker time its frames took (Streamer._pick's fair share)
         self.connected = now
 
     async def send_json(self, msg: dict[str, Any]) -> None:
@@ -144,6 +150,7 @@ class Streamer:
         slot = self.workers.interactive.least_loaded("sessions")
         slot.sessions += 1
         client.slot = slot
+        client.vtime = min((c.vtime for c in self.clients.values() if c.slot is slot), default=0.0)
         self.clients[client.session.id] = client
         self.wake()
 
@@ -203,6 +210,17 @@ class Streamer:
         worker got none (4 clients on one worker: two got 0 frames a second)."""
         clients = list(self.clients.values())
         order = [clients[(self._rr + i) % len(clients)] for i in range(len(clients))]
+        # by time: the least worker time used first (round-robin order among equals); a
+        # session back from idle starts no further than FAIR_SLACK_MS behind those that kept
+        # drawing on its worker
+        floor: dict[int, float] = {}
+        for c in order:
+            if now - c.session.last_start < SHARE_RECENT_S:
+                floor[c.slot.index] = min(floor.get(c.slot.index, c.vtime), c.vtime)
+        for c in order:
+            if c.slot.index in floor:
+                c.vtime = max(c.vtime, floor[c.slot.index] - FAIR_SLACK_MS)
+        order.sort(key=lambda c: c.vtime)
         soonest = None
         waiting: set[int] = set()   # workers with a due session that its room holds back
         queued: list[Client] = []   # due sessions that may take a worker's queued place
@@ -258,6 +276,7 @@ class Streamer:
                 self.wake()
             render_ms, encode_ms = out["render_ms"], out["encode_ms"]
             client.stalls = 0
+            client.vtime += render_ms + encode_ms
             s.measured(job, render_ms, self.clock(), once=bool(out.get("once")),
                        scene_reused=out.get("scene_reused"), scene_warped=bool(out.get("scene_warped")))
             metrics.RENDER_MS.observe(render_ms)
