@@ -1,16 +1,18 @@
 """A stream's frame rate alone and beside a hostile session on the same worker (issue 33,
 finding 1): the default look at 640x360, playing, acknowledging every frame, for
 `seconds`; then the same while a second client plays a 16-layer volume-noise look at
-1920x1080 (and, with --reseed, changes its noise seed every 6 s). Prints frames per
+1920x1080 (and, with --reseed, changes its noise seed every 6 s; with --difference, the
+default look's "difference" teaching view at 1920x1080 instead). Prints frames per
 second, the longest gap between frames, and how many gaps passed 1 s. Starts its own
 server on 127.0.0.1 (stopped by PID):
 
-    .venv/bin/python scripts/fair_share.py [--seconds 20] [--reseed]
+    .venv/bin/python scripts/fair_share.py [--seconds 20] [--reseed | --difference]
 """
 
 from __future__ import annotations
 
 import argparse
+import statistics
 import asyncio
 import json
 
@@ -43,13 +45,17 @@ async def watch(url: str, seconds: float) -> dict:
         await ws.close()
     longest, over = gaps(frames)
     span = frames[-1][0] - frames[0][0] if len(frames) > 1 else 1.0
-    return {"fps": round((len(frames) - 1) / span, 1), "longest_gap_s": round(longest, 2), "gaps_over_1s": over}
+    return {"fps": round((len(frames) - 1) / span, 1), "longest_gap_s": round(longest, 2), "gaps_over_1s": over,
+            "render_ms": round(statistics.median(f[1][4] for f in frames), 1) if frames else None}
 
 
-async def hostile(url: str, seconds: float, reseed: bool, stop: asyncio.Event) -> dict:
-    ws = await _session(url, hostile_query(), 1920, 1080, 30)
+async def hostile(url: str, seconds: float, reseed: bool, stop: asyncio.Event, difference: bool = False) -> dict:
+    ws = await _session(url, "v=1&time=3" if difference else hostile_query(), 1920, 1080, 30)
     n = [0]
     try:
+        if difference:
+            await ws.send(json.dumps({"type": "view", "width": 1920, "height": 1080, "fps": 30,
+                                      "show": "difference"}))
         await ws.send(json.dumps({"type": "play", "playing": True}))
         seed = 1
         while not stop.is_set():
@@ -63,13 +69,13 @@ async def hostile(url: str, seconds: float, reseed: bool, stop: asyncio.Event) -
     return {"frames": n[0]}
 
 
-async def main(seconds: float, reseed: bool) -> None:
+async def main(seconds: float, reseed: bool, difference: bool = False) -> None:
     srv = ChildServer()
     try:
         url = srv.url.replace("http", "ws", 1)
         alone = await watch(url, seconds)
         stop = asyncio.Event()
-        h = asyncio.create_task(hostile(url, seconds, reseed, stop))
+        h = asyncio.create_task(hostile(url, seconds, reseed, stop, difference))
         await asyncio.sleep(4.0)   # the hostile look's first frames (compile, bake)
         beside = await watch(url, seconds)
         stop.set()
@@ -84,5 +90,6 @@ if __name__ == "__main__":
     ap = argparse.ArgumentParser()
     ap.add_argument("--seconds", type=float, default=20.0)
     ap.add_argument("--reseed", action="store_true")
+    ap.add_argument("--difference", action="store_true")
     a = ap.parse_args()
-    asyncio.run(main(a.seconds, a.reseed))
+    asyncio.run(main(a.seconds, a.reseed, a.difference))
