@@ -265,3 +265,32 @@ def test_sessions_share_a_worker_by_time_not_by_turns():
     idle.session.apply(parse('{"type": "play", "playing": true}'), 10.0)
     st._pick(10.0)
     assert idle.vtime >= min(cheap.vtime, costly.vtime) - FAIR_SLACK_MS - 1e-9
+
+
+class _Pending:
+    async def call(self, *args, **kwargs):
+        return {"pending": "noise", "render_ms": 0.0, "encode_ms": 0.0}
+
+
+def test_a_frame_whose_noise_tile_bakes_is_asked_again_shortly_not_sent():
+    """A worker whose noise tile for the look is baking on its thread answers at once that
+    it is not ready (workers/worker.py frame): nothing is sent, the frame is owed again, and
+    not before PENDING_RETRY_S, so that the worker draws other sessions' frames meanwhile."""
+    import asyncio
+    from fogbank.stream.streaming import PENDING_RETRY_S
+    st = Streamer(workers=_Pending())
+    c = _client(st, "a")
+    c.ws = _Socket()
+    c.session.last_full = True
+    c.session.dirty = True
+    st.clock = lambda: 5.0
+
+    async def go():
+        job = c.session.start_frame(5.0)
+        st.frames[0] = 1
+        await st._produce(c, job)
+    asyncio.run(go())
+    assert c.ws.sent == [] and c.session.sent == 0 and c.session.making == 0
+    assert c.session.wants_frame(5.0) is True
+    assert c.session.next_due(5.0) == 5.0 + PENDING_RETRY_S
+    assert st.frames[0] == 0

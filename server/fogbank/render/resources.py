@@ -4,6 +4,7 @@ texture and the baked noise tiles (caches of their own, apart from the passes)."
 from __future__ import annotations
 
 from collections import OrderedDict
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
 
 import moderngl
@@ -198,6 +199,27 @@ class NoiseTiles:
         self._tiles: dict[tuple, moderngl.Texture] = {}
         self._none: moderngl.Texture | None = None
         self.baked = 0   # tiles baked (a frame that baked one paid for it)
+        # tiles baked on a thread of their own while the worker draws other sessions'
+        # frames (ready), oldest first; numpy lets the GIL go in the bake's big operations
+        self._baking: OrderedDict[tuple, Future] = OrderedDict()
+        self._pool: ThreadPoolExecutor | None = None
+
+    def ready(self, key: tuple) -> bool:
+        """Whether get(key) returns without baking: the tile is baked, or its bake on the
+        background thread is done. Not ready: its bake is started there (once), and a
+        stream's frame that needs it comes back later instead of holding the worker for
+        the bake (0.3-1.5 s: every other stream on the worker waited; issue 33)."""
+        if key in self._tiles:
+            return True
+        fut = self._baking.get(key)
+        if fut is None:
+            if self._pool is None:
+                self._pool = ThreadPoolExecutor(1, thread_name_prefix="fogbank-bake")
+            while len(self._baking) >= NOISE_TILES:   # a tile asked for and never taken
+                self._baking.popitem(last=False)[1].cancel()
+            self._baking[key] = self._pool.submit(bake, *key)
+            return False
+        return fut.done()
 
     def none(self) -> moderngl.Texture:
         if self._none is None:
@@ -206,7 +228,8 @@ class NoiseTiles:
 
     def get(self, key: tuple) -> moderngl.Texture:
         if key not in self._tiles:
-            data = bake(*key)
+            fut = self._baking.pop(key, None)
+            data = fut.result() if fut is not None and not fut.cancelled() else bake(*key)
             self.baked += 1
             n = key[0]
             # GL wants x fastest; the baked array is indexed [x, y, z]

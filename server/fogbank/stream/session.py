@@ -169,6 +169,7 @@ class Session:
         self.making = 0           # frames started but not yet sent
         self.sent = 0             # id of the last frame sent
         self.last_start = -math.inf
+        self.not_before = -math.inf   # no frame before this (redo's `after`)
         self.last_input = -math.inf
         self.interacting = False
         self.dirty = True         # the look changed since the last frame
@@ -343,7 +344,7 @@ class Session:
             if not self.last_full and self.previewing(now):
                 return self.last_input + INPUT_SETTLE_S   # the refinement, once input settles
             return None
-        return max(now, self.last_start + 1.0 / self.view.fps)
+        return max(now, self.last_start + 1.0 / self.view.fps, self.not_before)
 
     def preview_budget(self) -> float:
         """The render budget of this session's previews, by its view's size (preview_budget_ms)."""
@@ -685,10 +686,13 @@ class Session:
             if not fresh(i - 1) or self.preview_costs[i - 1][0] <= budget:
                 self.preview_rung = i - 1
 
-    def redo(self) -> None:
-        """A frame was lost to the server, not to the look (its worker stalled or died):
-        draw the look again, whether or not its time runs."""
+    def redo(self, after: float | None = None) -> None:
+        """A frame was lost to the server, not to the look (its worker stalled or died), or
+        its worker was not ready for it (a noise tile baking): draw the look again, whether
+        or not its time runs; not before `after` (monotonic s) when given."""
         self.dirty = True
+        if after is not None:
+            self.not_before = after
 
     def frame_done(self, job: FrameJob, sent: bool) -> None:
         """A frame was sent (or dropped: failed, stale, or the client left)."""

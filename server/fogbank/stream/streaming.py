@@ -51,6 +51,7 @@ QUEUE_MAX_MS = 60.0   # a frame costlier than this is never queued behind anothe
 # drawn again; past this the session is paused all the same (a worker that seems stalled
 # each time, e.g. one waiting on a GPU without using the CPU, must not be killed forever)
 STALL_RETRIES = 2
+PENDING_RETRY_S = 0.1   # a frame whose worker was not ready (a noise tile baking) is asked again after this
 # sessions share their worker by time: the due session whose frames have taken the least
 # worker time goes first (a costly look's frames come less often, others' do not wait a
 # turn per costly frame); one that was idle comes back at most this far ahead of the others
@@ -270,10 +271,14 @@ class Streamer:
                 out = await self.workers.call(slot, worker.frame, job.still, s.id, job.msaa, job.quality,
                                               job.show, job.layer, job.hold_fog, not job.full,
                                               deadline=self.settings.frame_deadline_s)
-                slot.drew(cost.program_key(job.still))
+                if not out.get("pending"):
+                    slot.drew(cost.program_key(job.still))
             finally:
                 self.frames[slot.index] -= 1
                 self.wake()
+            if out.get("pending"):   # its noise tile bakes on the worker's thread: ask again soon
+                s.redo(after=self.clock() + PENDING_RETRY_S)
+                return
             render_ms, encode_ms = out["render_ms"], out["encode_ms"]
             client.stalls = 0
             client.vtime += render_ms + encode_ms

@@ -199,6 +199,12 @@ def frame(still, slot: str, msaa: bool, quality: int, show: str = "shaded", laye
     from fogbank.render.encode import encode
 
     def fn(r):
+        from fogbank.kinds.packing import uses_noise
+        n = still.noise
+        if uses_noise(still) and not r.noise.ready((n.size, n.octaves, n.blur, n.seed)):
+            # its noise tile bakes on a thread meanwhile: the session asks again later, and
+            # the worker draws other sessions' frames instead of waiting for the bake
+            return {"pending": "noise", "render_ms": 0.0, "encode_ms": 0.0}
         t0 = time.perf_counter()
         stats, reused, warped = None, None, False
         work = (r.programs.compiled, r.noise.baked, r.shadows.new_suns)
