@@ -177,7 +177,8 @@ def none_match(header: str | None, etag: str) -> bool:
     return any(tag.strip().removeprefix("W/") == ours for tag in header.split(","))
 
 
-TOO_COSTLY_KEPT = 4096   # stills remembered as stopped at their deadline (least recent out)
+TOO_COSTLY_KEPT = 4096   # stills remembered as stopped at their deadline (oldest out)
+TOO_COSTLY_S = 600.0     # ... for this long (a still stopped under a load that has passed may fit later)
 
 
 def _over_budget(c: cost.Cost, settings: Settings, what: str,
@@ -271,9 +272,10 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         except WorkerError as exc:
             metrics.ERRORS.labels("busy" if exc.status == 503 else "render").inc()
             msg = str(exc)
-            if remember and isinstance(exc, DeadlineExceeded) and not exc.stalled:
-                costly = state["too_costly"]
-                costly[remember] = deadline
+            if remember and isinstance(exc, DeadlineExceeded) and exc.stalled is False:
+                costly = state["too_costly"]   # only a worker seen busy to the end blames the look
+                costly.pop(remember, None)
+                costly[remember] = (deadline, asyncio.get_running_loop().time())
                 while len(costly) > TOO_COSTLY_KEPT:
                     costly.popitem(last=False)
                 msg += "; asked again, it is refused (422): make it cheaper"
@@ -319,7 +321,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         flight = flights.get(etag)
         if flight is None:   # the first ask for this still: checked, then rendered in a task of its own
             slot, c = _route(still, fmt)
-            refusal = _over_budget(c, settings, "this still", state["too_costly"].get(etag))
+            refusal = _over_budget(c, settings, "this still", _stopped_at(etag))
             if refusal is not None:
                 metrics.ERRORS.labels("cost").inc()
                 raise RequestValidationError([dict(e, loc=[loc, *e["loc"][1:]]) for e in refusal.errors()])
@@ -329,7 +331,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
                                     f"{settings.max_queued_stills} wait (FOGBANK_MAX_QUEUED_STILLS); retry shortly",
                                     headers={"Retry-After": "2"})
             state["stills_waiting"] += 1   # counted now: the task may not run before the next ask
-            flight = asyncio.get_running_loop().create_task(_render_still(still, fmt, slot, etag))
+            flight = asyncio.get_running_loop().create_task(_render_still(still, fmt, etag))
             flights[etag] = flight
             flight.add_done_callback(lambda t, k=etag: (flights.pop(k, None), t.cancelled() or t.exception()))
         else:
@@ -340,7 +342,17 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         headers["Server-Timing"] = f'render;dur={out["render_ms"]:.1f}, encode;dur={out["encode_ms"]:.1f}'
         return Response(out["data"], media_type=MEDIA_TYPES[fmt], headers=headers)
 
-    async def _render_still(still: StillParams, fmt: str, slot, etag: str) -> dict:
+    def _stopped_at(etag: str) -> float | None:
+        """The deadline a still was stopped at within TOO_COSTLY_S (else None)."""
+        got = state["too_costly"].get(etag)
+        if got is None:
+            return None
+        if asyncio.get_running_loop().time() - got[1] > TOO_COSTLY_S:
+            del state["too_costly"][etag]
+            return None
+        return got[0]
+
+    async def _render_still(still: StillParams, fmt: str, etag: str) -> dict:
         """One distinct still: a place among max_stills, then its worker job, waiting for
         both at most queue_timeout_s in all (so that every still is answered within
         queue_timeout_s + render_timeout_s: the proxy's read timeout is set above that,
@@ -359,6 +371,9 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         state["stills"] += 1
         try:
             waited = asyncio.get_running_loop().time() - t0
+            # its worker chosen now, not when it was asked: stills that waited together for
+            # places all saw the same least loaded worker then
+            slot, _ = _route(still, fmt)
             out = await _job(slot, worker.still, still, fmt, deadline=settings.render_timeout_s, remember=etag,
                              queue_s=max(0.5, settings.queue_timeout_s - waited))
             slot.drew(cost.program_key(still))

@@ -109,7 +109,8 @@ HOLD_COMPILE_S = 0.6
 # 500 ms, its next ones 65.
 QUIET_S = 2.0
 # ... but not without bound: a level's first frames (its scene pass and whole fog drawn)
-# may take at most this once quiet, and at most SHARED_FIRST_MS while other sessions play or
+# may take at most this once quiet (or the whole budget where that is more: 2 s for a
+# paused look), and at most SHARED_FIRST_MS while other sessions play or
 # preview on the worker (a frame cannot be interrupted, and theirs wait for it). 16 layers
 # of volume noise at 1920x1080 climbed while quiet to 1440 px, whose first two frames took
 # 6.5 s each: a 640x360 stream on the same worker got 0.2 frames a second (issue 33)

@@ -240,7 +240,7 @@ class Streamer:
                 queued.append(c)
             else:
                 waiting.add(c.slot.index)
-        for c in queued:   # in round-robin order too: playing streams take turns
+        for c in queued:   # in the same order (by worker time used): playing streams take turns
             if c.slot.index not in waiting:
                 self._rr = (clients.index(c) + 1) % len(clients)
                 return c, None
@@ -400,6 +400,9 @@ class TokenBucket:
         return True
 
 
+_YIELDING: set = set()
+
+
 def _room(streamer: Streamer, now: float, addr: str | None, yielded: list) -> bool:
     victim = streamer.make_room(now, addr)
     if victim is not None:
@@ -435,7 +438,9 @@ async def websocket_endpoint(ws: WebSocket, streamer: Streamer, renderer_info: d
         metrics.ERRORS.labels("sessions_full").inc()
         refusal = f"the server is full ({cfg.max_sessions} sessions); retry in a few seconds"
     for c in yielded:
-        asyncio.get_running_loop().create_task(_yield(c, now))
+        task = asyncio.get_running_loop().create_task(_yield(c, now))
+        _YIELDING.add(task)   # kept until done: the loop holds only a weak reference
+        task.add_done_callback(_YIELDING.discard)
     if refusal:
         try:
             await ws.send_json({"type": "error", "msg": refusal, "retry_after": 5})

@@ -42,27 +42,40 @@ from fogbank.workers import worker
 
 log = logging.getLogger("fogbank.workers")
 
-# A worker that runs a job yet uses under this share of a core over STALL_WINDOW_S makes no
-# progress: it is stalled (stopped, swapped out, hung in a call), not busy. A render keeps
-# at least one core busy (llvmpipe's raster threads; a GPU driver that waits spins or
-# takes its own share); a worker stopped by SIGSTOP uses none.
+# A worker with jobs whose threads neither ran nor waited for a core for more than this
+# share of one over STALL_WINDOW_S makes no progress: it is stalled (stopped, hung), not
+# busy. Its progress is its threads' CPU time plus their time runnable in the run queue
+# (/proc/PID/task/*/schedstat), so that a worker starved of cores (a niced batch worker
+# beside the streams' raster threads gets ~0.2 cores) is busy, not stalled. With llvmpipe a
+# render is CPU work; on a GPU a worker may sleep in its driver while the GPU draws, so
+# there only a stopped worker (every thread in state T) is stalled, and a hang is left to
+# the job's deadline.
 STALL_CPU_SHARE = 0.2
 STALL_WINDOW_S = 3.0
 
 
-def cpu_stat(pid: int | None) -> tuple[float, str] | None:
-    """(CPU time used by process `pid` and its threads, user + system, s; its state letter:
-    R runnable, S sleeping, T stopped, ...), from /proc; None where there is no such
+def cpu_stat(pid: int | None) -> tuple[float, bool] | None:
+    """(the seconds process `pid`'s threads have run or waited runnable for a core; whether
+    every thread is stopped, state T or t), from /proc; None where there is no such
     process or no /proc."""
     if not pid:
         return None
+    total, stopped = 0.0, True
     try:
-        with open(f"/proc/{pid}/stat", "rb") as f:
-            fields = f.read().rsplit(b")", 1)[1].split()
-    except (OSError, IndexError):
+        tasks = os.listdir(f"/proc/{pid}/task")
+    except OSError:
         return None
-    # after the command's ")": field 3 (state) is fields[0], utime (14) and stime (15) 11 and 12
-    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK"), fields[0].decode()
+    for tid in tasks:
+        try:
+            with open(f"/proc/{pid}/task/{tid}/schedstat", "rb") as f:
+                on_cpu, waiting = f.read().split()[:2]
+            with open(f"/proc/{pid}/task/{tid}/stat", "rb") as f:
+                state = f.read().rsplit(b")", 1)[1].split()[0]
+        except (OSError, IndexError, ValueError):
+            continue   # a thread that ended meanwhile
+        total += (int(on_cpu) + int(waiting)) / 1e9
+        stopped = stopped and state in (b"T", b"t")
+    return total, stopped
 
 
 @lru_cache(maxsize=1)
@@ -289,8 +302,9 @@ class Supervisor:
             now = time.monotonic()
             # how much of a core the worker used while the job ran (pebble has killed it by
             # now; the samples are the probe loop's): none means it stalled
-            share = self.cpu_share(slot, max(t0, now - deadline - 3.0), now)
-            stalled = None if share is None else share < STALL_CPU_SHARE
+            share = self.cpu_share(slot, now - STALL_WINDOW_S - 0.5, now)
+            stalled = None if share is None else (share < STALL_CPU_SHARE
+                                                  and (self.cpu_renderer() or bool(slot.cpu[-1][2])))
             slot.started = now   # pebble starts a new worker: give it time to start
             slot.down_since = now
             slot.compiled = {warm_variant()}
@@ -397,21 +411,30 @@ class Supervisor:
         return (pts[-1][1] - pts[0][1]) / (pts[-1][0] - pts[0][0])
 
     def stalled(self, slot: Slot, now: float) -> bool:
-        """The slot has had jobs in flight for STALL_WINDOW_S, its worker used under
-        STALL_CPU_SHARE of a core over that time (a worker with a job is running it, or
-        starting, which takes CPU too), and it is not waiting for a core (state R: on a
-        machine loaded 10 deep a runnable worker gets 0.2 cores)."""
+        """The slot has had jobs in flight for STALL_WINDOW_S and its worker made no
+        progress over that time (under STALL_CPU_SHARE of a core run or waited for; a
+        worker with a job is running it, or starting, which takes CPU too). On a GPU, only
+        when it is stopped as well (STALL_CPU_SHARE's comment)."""
         if slot.busy_since is None or now - slot.busy_since < STALL_WINDOW_S or not slot.cpu:
             return False
         share = self.cpu_share(slot, now - STALL_WINDOW_S - 0.5, now)
-        return share is not None and share < STALL_CPU_SHARE and slot.cpu[-1][2] != "R"
+        if share is None or share >= STALL_CPU_SHARE:
+            return False
+        return self.cpu_renderer() or slot.cpu[-1][2]
+
+    def cpu_renderer(self) -> bool:
+        """Whether the workers render on the CPU (llvmpipe, softpipe: every render is CPU work)."""
+        r = (self.info.get("renderer") or "").lower()
+        return "llvmpipe" in r or "softpipe" in r or "swrast" in r
 
     def slot_live(self, slot: Slot, now: float) -> bool:
         """The slot can render: it rendered (a probe or a job) within `liveness_s`, or it
         runs a job and is not stalled; and it has rendered since its worker was last
         killed or replaced (a new worker takes seconds to start and warm up)."""
-        if slot.down_since is not None or self.stalled(slot, now):
+        if self.stalled(slot, now):
             return False
+        if slot.down_since is not None:   # replaced: live again once its new worker runs a job
+            return slot.running()
         return now - slot.last_ok <= self.settings.liveness_s or slot.running()
 
     def lane_live(self, lane: Lane, now: float | None = None) -> bool:
