@@ -283,7 +283,12 @@ def test_healthz_fails_while_no_worker_renders_and_readyz_says_why():
         assert status == 503 and json.loads(body)["status"] == "failing"
         for p in workers:
             os.kill(p, signal.SIGCONT)
-        time.sleep(2.0)
+        # back once the workers render: the continued ones, or their replacements if the
+        # stall was found first (3 s without progress; a new worker warms up in about 7 s)
+        for _ in range(60):
+            if get(srv.url + "/healthz")[0] == 200 and get(srv.url + "/readyz")[0] == 200:
+                break
+            time.sleep(0.5)
         assert get(srv.url + "/healthz")[0] == 200
         assert get(srv.url + "/readyz")[0] == 200
     finally:

@@ -125,7 +125,12 @@ def test_liveness_fails_while_no_worker_answers_and_recovers():
         finally:
             for pid in pids:
                 os.kill(pid, signal.SIGCONT)
-        await asyncio.sleep(2.0)
+        # back once a worker renders: the continued one, or its replacement if the stall
+        # was found first (3 s without progress; a new worker warms up in about 7 s)
+        for _ in range(300):
+            if sup.live()[0]:
+                break
+            await asyncio.sleep(0.1)
         assert sup.live()[0] is True
     run(body, Settings(liveness_s=1.5, probe_interval_s=0.2, probe_deadline_s=60))
 

@@ -271,11 +271,12 @@ class Supervisor:
         if not slot.inflight:
             slot.busy_since = t0
         slot.inflight.add(fut)
+        generation = slot.generation   # a hard replacement under the job changes it
         try:
             # asyncio.wait, not wait_for: since Python 3.11 a wait_for timeout and pebble's
             # deadline are the same TimeoutError class, and they must be told apart
             waiter = asyncio.wrap_future(fut)
-            end, generation = t0 + queue_s + deadline, slot.generation
+            end = t0 + queue_s + deadline
             while True:   # until done, past the wait's end, or the worker was replaced under it
                 done, _ = await asyncio.wait({waiter}, timeout=max(0.0, min(0.5, end - time.monotonic())))
                 if done or time.monotonic() >= end or slot.generation != generation:
@@ -320,6 +321,11 @@ class Supervisor:
                                        cpu_share=share, retry_after=2) from None
             raise DeadlineExceeded(f"rendering took over {deadline:g} s and was stopped", stalled=stalled,
                                    cpu_share=share, retry_after=5) from None
+        except (ProcessExpired, BrokenProcessPool, FutureCancelled) if slot.generation != generation else ():
+            # the probe loop replaced a stalled worker under this job (its pool stopped): the
+            # same answer as when the wait noticed it first
+            metrics.ERRORS.labels("worker_replaced").inc()
+            raise WorkerError(f"the {slot.lane} renderer stalled and was replaced; retry", retry_after=2) from None
         except ProcessExpired as exc:
             slot.started = slot.down_since = time.monotonic()
             slot.compiled = {warm_variant()}
