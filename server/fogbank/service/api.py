@@ -186,13 +186,12 @@ def _over_budget(c: cost.Cost, settings: Settings, what: str,
     """A 422 naming what to reduce, when `c` is beyond the still budgets, or when this
     still was stopped at its deadline of `stopped_at` s before (it would be again: asking
     once more must not cost another worker)."""
+    reduce = ("Reduce what costs most: " + "; ".join(f"{k} ~{c.parts[k]:.1f} s" for k in c.biggest())
+              + " (fewer or cheaper layers, fewer volume samples, a larger effects.fog_scale, or fewer pixels)")
     if stopped_at is not None:
         return RequestValidationError([errors.error(
             ["body"], f"{what} was stopped at its deadline of {stopped_at:g} s when it was asked before "
-            f"(estimated at {c.seconds:.1f} s), so it is refused. Reduce what costs most: " + "; ".join(
-                f"{k} ~{c.parts[k]:.1f} s" for k in c.biggest())
-            + " (fewer or cheaper layers, fewer volume samples, a larger effects.fog_scale, "
-              "or fewer pixels)", "cost")])
+            f"(estimated at {c.seconds:.1f} s), so it is refused. {reduce}", "cost")])
     if c.memory > settings.still_memory_mb << 20:
         return RequestValidationError([errors.error(
             ["body", "width"], f"{what} needs about {c.memory / 2**20:.0f} MiB of render targets; "
@@ -200,10 +199,7 @@ def _over_budget(c: cost.Cost, settings: Settings, what: str,
     if c.seconds > settings.still_budget_s:
         return RequestValidationError([errors.error(
             ["body"], f"{what} is estimated at {c.seconds:.1f} s of rendering; this server allows "
-            f"{settings.still_budget_s:g} s. Reduce what costs most: " + "; ".join(
-                f"{k} ~{c.parts[k]:.1f} s" for k in c.biggest())
-            + " (fewer or cheaper layers, fewer volume samples, a larger effects.fog_scale, "
-              "or fewer pixels)", "cost")])
+            f"{settings.still_budget_s:g} s. {reduce}", "cost")])
     return None
 
 

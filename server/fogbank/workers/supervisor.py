@@ -60,7 +60,7 @@ def cpu_stat(pid: int | None) -> tuple[float, bool] | None:
     process or no /proc."""
     if not pid:
         return None
-    total, stopped = 0.0, True
+    total, stopped, read = 0.0, True, False
     try:
         tasks = os.listdir(f"/proc/{pid}/task")
     except OSError:
@@ -75,7 +75,9 @@ def cpu_stat(pid: int | None) -> tuple[float, bool] | None:
             continue   # a thread that ended meanwhile
         total += (int(on_cpu) + int(waiting)) / 1e9
         stopped = stopped and state in (b"T", b"t")
-    return total, stopped
+        read = True
+    # a kernel without schedstat (CONFIG_SCHED_INFO off) tells nothing: not "no progress"
+    return (total, stopped) if read else None
 
 
 @lru_cache(maxsize=1)
