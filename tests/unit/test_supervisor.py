@@ -1,4 +1,4 @@
-"""The supervisor's reading of a worker's progress (workers/supervisor.py cpu_stat): time
+"""The supervisor's reading of a worker's progress (workers/supervisor.py Progress): time
 run or waited for a core, summed over its threads, and whether it is stopped."""
 
 from __future__ import annotations
@@ -11,15 +11,16 @@ import time
 
 import pytest
 
-from fogbank.workers.supervisor import cpu_stat
+from fogbank.workers.supervisor import Progress, thread_times
 
 pytestmark = pytest.mark.unit
 
 
 def _progress(pid: int, seconds: float) -> tuple[float, bool]:
-    a = cpu_stat(pid)
+    p = Progress(pid)
+    a = p.read()
     time.sleep(seconds)
-    b = cpu_stat(pid)
+    b = p.read()
     return (b[0] - a[0]) / seconds, b[1]
 
 
@@ -36,8 +37,40 @@ def test_a_busy_process_progresses_and_a_stopped_one_does_not():
         time.sleep(0.2)
         share, stopped = _progress(busy.pid, 1.0)
         assert share < 0.05 and stopped is True
-        assert cpu_stat(None) is None and cpu_stat(2 ** 22 + 7) is None
+        assert Progress(None).read() is None and Progress(2 ** 22 + 7).read() is None
     finally:
         for p in (busy, idle):
             os.kill(p.pid, signal.SIGKILL)
             p.wait(10)
+
+
+# a thread spins for 1.5 s and ends; the main thread sleeps on
+ENDING_THREAD = """
+import threading, time
+def spin():
+    end = time.monotonic() + 1.5
+    while time.monotonic() < end:
+        pass
+threading.Thread(target=spin).start()
+time.sleep(60)
+"""
+
+
+def test_a_thread_that_ends_does_not_take_back_its_progress():
+    """/proc lists live threads only: summed over those, the count fell by the ended
+    thread's time (a worker read -2.49 cores and was called stalled, issue 33)."""
+    proc = subprocess.Popen([sys.executable, "-c", ENDING_THREAD])
+    try:
+        p = Progress(proc.pid)
+        time.sleep(0.3)
+        readings = []
+        for _ in range(15):   # through the thread's end, 0.2 s apart
+            readings.append(p.read()[0])
+            time.sleep(0.2)
+        live_sum = sum(secs for secs, _ in thread_times(proc.pid).values())
+        assert all(b >= a for a, b in zip(readings, readings[1:]))
+        assert readings[-1] - readings[0] > 0.7        # the thread's run is counted
+        assert live_sum < 0.5                          # what a sum over live threads says now
+    finally:
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.wait(10)

@@ -45,7 +45,7 @@ log = logging.getLogger("fogbank.workers")
 # A worker with jobs whose threads neither ran nor waited for a core for more than this
 # share of one over STALL_WINDOW_S makes no progress: it is stalled (stopped, hung), not
 # busy. Its progress is its threads' CPU time plus their time runnable in the run queue
-# (/proc/PID/task/*/schedstat), so that a worker starved of cores (a niced batch worker
+# (/proc/PID/task/*/schedstat, Progress), so that a worker starved of cores (a niced batch worker
 # beside the streams' raster threads gets ~0.2 cores) is busy, not stalled. With llvmpipe a
 # render is CPU work; on a GPU a worker may sleep in its driver while the GPU draws, so
 # there only a stopped worker (every thread in state T) is stalled, and a hang is left to
@@ -54,17 +54,18 @@ STALL_CPU_SHARE = 0.2
 STALL_WINDOW_S = 3.0
 
 
-def cpu_stat(pid: int | None) -> tuple[float, bool] | None:
-    """(the seconds process `pid`'s threads have run or waited runnable for a core; whether
-    every thread is stopped, state T or t), from /proc; None where there is no such
-    process or no /proc."""
+def thread_times(pid: int | None) -> dict[int, tuple[float, bool]] | None:
+    """Each live thread of process `pid`: (the seconds it has run or waited runnable for a
+    core; whether it is stopped, state T or t), from /proc; None where there is no such
+    process, no /proc, or no schedstat (CONFIG_SCHED_INFO off: it tells nothing, which is
+    not "no progress")."""
     if not pid:
         return None
-    total, stopped, read = 0.0, True, False
     try:
         tasks = os.listdir(f"/proc/{pid}/task")
     except OSError:
         return None
+    out = {}
     for tid in tasks:
         try:
             with open(f"/proc/{pid}/task/{tid}/schedstat", "rb") as f:
@@ -73,11 +74,32 @@ def cpu_stat(pid: int | None) -> tuple[float, bool] | None:
                 state = f.read().rsplit(b")", 1)[1].split()[0]
         except (OSError, IndexError, ValueError):
             continue   # a thread that ended meanwhile
-        total += (int(on_cpu) + int(waiting)) / 1e9
-        stopped = stopped and state in (b"T", b"t")
-        read = True
-    # a kernel without schedstat (CONFIG_SCHED_INFO off) tells nothing: not "no progress"
-    return (total, stopped) if read else None
+        out[int(tid)] = ((int(on_cpu) + int(waiting)) / 1e9, state in (b"T", b"t"))
+    return out or None
+
+
+class Progress:
+    """One worker process's progress as a count that never goes back: the time each thread
+    it has had ran or waited for a core, summed. /proc lists live threads only, and a
+    thread that ends takes its time with it: a sum over the live ones fell by seconds
+    while a still rendered (a job past its deadline read -2.49 cores, "stalled", and was
+    answered as the server's fault). Each thread adds what it gained since it was last
+    seen; one that ended loses only its time since then."""
+
+    def __init__(self, pid: int | None):
+        self.pid = pid
+        self.seen: dict[int, float] = {}
+        self.total = 0.0
+
+    def read(self) -> tuple[float, bool] | None:
+        """(the count in seconds, whether every live thread is stopped); None as thread_times."""
+        now = thread_times(self.pid)
+        if now is None:
+            return None
+        for tid, (secs, _) in now.items():
+            self.total += max(0.0, secs - self.seen.get(tid, 0.0))
+        self.seen = {tid: secs for tid, (secs, _) in now.items()}
+        return self.total, all(stopped for _, stopped in now.values())
 
 
 @lru_cache(maxsize=1)
@@ -131,7 +153,7 @@ class Slot:
     # (monotonic s, CPU s, state) of its worker process, sampled each probe interval while
     # it has jobs (Supervisor.sample_cpu); cleared when the process changes
     cpu: deque = field(default_factory=lambda: deque(maxlen=256))
-    cpu_pid: int | None = None
+    progress: Progress = field(default_factory=lambda: Progress(None))   # of that process
     busy_since: float | None = None   # since when it has had jobs in flight (queued or running)
     generation: int = 0   # counts hard replacements: the jobs of a killed worker are lost
     down_since: float | None = None   # killed or replaced then, and not rendered since
@@ -402,10 +424,10 @@ class Supervisor:
             slot.cpu.clear()
             return
         pid = slot.worker_pid()
-        if pid != slot.cpu_pid:
+        if pid != slot.progress.pid:
             slot.cpu.clear()
-            slot.cpu_pid = pid
-        stat = cpu_stat(pid)
+            slot.progress = Progress(pid)
+        stat = slot.progress.read()
         if stat is not None:
             slot.cpu.append((now, *stat))
 
