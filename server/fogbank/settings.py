@@ -98,7 +98,7 @@ class Settings(BaseSettings):
                                "(without port) this server answers to, besides the address it binds; '*' any. "
                                "Others get 400 (a WebSocket, 403): a site whose name is made to resolve to "
                                "this server (DNS rebinding) sends its own name. /healthz, /readyz and "
-                               "/metrics answer any host")
+                               "/metrics also answer any IP address (a probe's or scraper's Host)")
     allowed_origins: str = Field("", description="comma-separated Origins allowed on /ws besides "
                                  "the server's own host; '*' allows any")
 

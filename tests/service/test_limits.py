@@ -266,8 +266,12 @@ def test_other_hosts_are_refused_against_dns_rebinding(client):
     assert exc.value.code == 1008
     for host in ("localhost:8000", "127.0.0.1", "[::1]:8051", "LOCALHOST"):
         assert client.get("/api/presets", headers={"host": host}).status_code == 200
-    for path in ("/healthz", "/readyz", "/metrics"):
+    for path in ("/healthz", "/readyz", "/metrics"):   # a probe or scraper names the pod's address
         assert client.get(path, headers={"host": "10.244.3.7:8000"}).status_code == 200
+        assert client.get(path, headers={"host": "[fd00::7]:8000"}).status_code == 200
+        # a rebinding page needs a name: the metrics are not read through one
+        assert client.get(path, headers={"host": "evil.com:8051"}).status_code == 400
+    assert client.get("/api/presets", headers={"host": "10.244.3.7:8000"}).status_code == 400
 
 
 def test_allowed_hosts_add_the_bound_address_and_take_a_star():
@@ -278,3 +282,5 @@ def test_allowed_hosts_add_the_bound_address_and_take_a_star():
     assert host_allowed("fog.example.org:443", hosts) and not host_allowed("evil.org", hosts)
     assert not host_allowed(None, hosts) and not host_allowed("[bad", hosts)
     assert host_allowed("anything", allowed_hosts("*", "0.0.0.0"))
+    assert host_allowed("10.0.0.1:80", hosts, address_too=True) and not host_allowed("10.0.0.1:80", hosts)
+    assert not host_allowed("evil.org", hosts, address_too=True)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import ipaddress
 from urllib.parse import urlsplit
 
 from starlette.datastructures import Headers
@@ -68,8 +69,9 @@ def origin_allowed(origin: str | None, host: str | None, allowed: str, scheme: s
 
 
 # probes and scrapers address a replica by its own address (a Kubernetes probe sends the
-# pod's IP as its Host): these answer whatever the Host
-UNCHECKED_PATHS = frozenset({"/healthz", "/readyz", "/metrics"})
+# pod's IP as its Host): these also answer a Host that is an IP address. A rebinding page
+# needs a name of its own, never an address, so they still refuse other names
+PROBE_PATHS = frozenset({"/healthz", "/readyz", "/metrics"})
 
 
 def allowed_hosts(listed: str, bind_host: str) -> frozenset[str]:
@@ -81,7 +83,9 @@ def allowed_hosts(listed: str, bind_host: str) -> frozenset[str]:
     return frozenset(hosts)
 
 
-def host_allowed(host: str | None, allowed: frozenset[str]) -> bool:
+def host_allowed(host: str | None, allowed: frozenset[str], address_too: bool = False) -> bool:
+    """Whether `host` (a Host header) names one of `allowed`; with `address_too`, any IP
+    address passes as well (PROBE_PATHS)."""
     if "*" in allowed:
         return True
     if not host:
@@ -90,7 +94,14 @@ def host_allowed(host: str | None, allowed: frozenset[str]) -> bool:
         name = urlsplit("//" + host).hostname   # "[::1]:8000" -> "::1"
     except ValueError:
         return False
-    return name is not None and name.lower() in allowed
+    if name is None:
+        return False
+    if name.lower() in allowed:
+        return True
+    try:
+        return address_too and bool(ipaddress.ip_address(name))
+    except ValueError:
+        return False
 
 
 class HostCheck:
@@ -105,11 +116,11 @@ class HostCheck:
         self.allowed = allowed
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
-        if scope["type"] not in ("http", "websocket") or scope.get("path") in UNCHECKED_PATHS:
+        if scope["type"] not in ("http", "websocket"):
             await self.app(scope, receive, send)
             return
         host = Headers(scope=scope).get("host")
-        if host_allowed(host, self.allowed):
+        if host_allowed(host, self.allowed, address_too=scope.get("path") in PROBE_PATHS):
             await self.app(scope, receive, send)
             return
         if scope["type"] == "websocket":
