@@ -644,6 +644,19 @@ def test_slow_heads_and_bodies_are_timed_out():
         assert slow_body[1] < 7.0
         assert quiet == b"" and quiet_s < 5.0
         assert get(srv.url + "/api/presets")[0] == 200
+        # pipelined: a request, then the next one's head whose body never comes; the second
+        # is timed as a body (it was given the head's time, and told its head was late)
+        with socket.create_connection(("127.0.0.1", port), timeout=10) as s:
+            s.settimeout(10)
+            t0 = time.monotonic()
+            s.sendall(b"GET /api/presets HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n" + body_head + b"{")
+            piped = b""
+            while chunk := s.recv(65536):
+                piped += chunk
+            piped_s = time.monotonic() - t0
+        print(f"pipelined body that never came: closed in {piped_s:.1f} s")
+        assert piped.startswith(b"HTTP/1.1 200") and piped.count(b"HTTP/1.1 408") == 1
+        assert b"body did not arrive within 3 s" in piped and 2.5 < piped_s < 7.0
         # slow, but within the limits: answered
         got, took = _slow(port, b"GET /healthz HTTP/1.1\r\nHost: 127.0.0.1\r\n", b"\r\n", 0.6, 10)
         assert got.startswith(b"HTTP/1.1 200")

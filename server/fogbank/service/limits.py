@@ -198,18 +198,30 @@ def json_h11_protocol(max_url: int, head_timeout_s: float = 10.0, body_timeout_s
             self._disarm()
             super().connection_lost(exc)
 
-        def handle_events(self) -> None:
-            super().handle_events()
+        def _follow(self) -> None:
+            """The timer for what the connection reads now: a head (idle), a body, or none
+            (a request read, or the protocol switched); a running one is kept."""
             state = self.conn.their_state
-            if state is h11.SEND_BODY:
+            if state is h11.IDLE:
+                if self._reading != "head":
+                    self._arm("head", head_timeout_s)
+            elif state is h11.SEND_BODY:
                 if self._reading != "body":
                     self._arm("body", body_timeout_s)
-            elif state is not h11.IDLE:   # the request is read (or the protocol switched)
+            else:
                 self._disarm()
 
+        def handle_events(self) -> None:
+            super().handle_events()
+            self._follow()
+
         def on_response_complete(self) -> None:
+            # uvicorn starts the next cycle here, and reads a pipelined request already
+            # received: its head may be read and its body due (a head timer armed over the
+            # body's cut it to head_timeout_s and named the wrong part)
+            self._disarm()
             super().on_response_complete()
-            self._arm("head", head_timeout_s)   # the next request's head, on a kept connection
+            self._follow()
 
         def _read_timeout(self) -> None:
             what, seconds = self._reading, head_timeout_s if self._reading == "head" else body_timeout_s
