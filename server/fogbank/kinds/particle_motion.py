@@ -75,25 +75,40 @@ class Trajectories:
     playing at 30 frames a second is a step or two further each frame; from birth it was up
     to life_max steps, ~0.1 s per layer of 64 particles of life 1000 on this machine). A
     particle continued is bit for bit the one integrated from birth: the same operations on
-    the same float64 numbers, step by step. Keeps the last MAX_LAYERS * 2 layers; safe
-    across threads (the frame's plan and the rays API)."""
+    the same float64 numbers, step by step. Keeps the last MAX_LAYERS * 2 layers, and of
+    each the states at its last TIMES times (several sessions play one look on a worker,
+    each at its own time: with one state, each frame of one found the other's, later,
+    state and integrated every life again, 20 ms a frame of the default look); safe across
+    threads (the frame's plan and the rays API)."""
 
     SIZE = 32
+    TIMES = 4
+    NEXT_S = 1.0   # a state this close after the one it continued is the same session's next
 
     def __init__(self):
-        self._cache: OrderedDict = OrderedDict()
+        self._cache: OrderedDict = OrderedDict()   # key -> [state, ...], most recent last
         self._lock = threading.Lock()
 
-    def get(self, key) -> dict | None:
+    def get(self, key, t: float) -> dict | None:
+        """The state to continue from at time `t`: the latest one at or before it (a
+        state later than `t` has no particle to continue)."""
         with self._lock:
-            if key in self._cache:
-                self._cache.move_to_end(key)
-                return self._cache[key]
-        return None
+            states = self._cache.get(key)
+            if states is None:
+                return None
+            self._cache.move_to_end(key)
+            before = [s for s in states if s["t"] <= t]
+            return max(before, key=lambda s: s["t"]) if before else None
 
-    def put(self, key, value: dict) -> None:
+    def put(self, key, value: dict, continued: dict | None = None) -> None:
+        """Keep `value` (a state with its time "t"); in place of the state it `continued`
+        when that is within NEXT_S before it (a session playing on leaves its own past,
+        not another session's far earlier state)."""
         with self._lock:
-            self._cache[key] = value
+            drop = continued if continued is not None and value["t"] - continued["t"] <= self.NEXT_S else None
+            states = [s for s in self._cache.get(key, []) if s is not drop]
+            states.append(value)
+            self._cache[key] = states[-self.TIMES:]
             self._cache.move_to_end(key)
             while len(self._cache) > self.SIZE:
                 self._cache.popitem(last=False)
@@ -143,7 +158,7 @@ def simulate(layer, t: float, wind: np.ndarray,
     # from its stored step: p, v after k0 steps and prev after k0 - 1.
     k0 = np.zeros(len(slots), np.int64)
     key = (layer.model_dump_json(), tuple(float(x) for x in target), ground)
-    last = cache.get(key) if cache is not None else None
+    last = cache.get(key, t) if cache is not None else None
     if last is not None:
         idx = np.searchsorted(last["slots"], slots)
         idx = np.minimum(idx, len(last["slots"]) - 1)
@@ -176,8 +191,8 @@ def simulate(layer, t: float, wind: np.ndarray,
         p = np.where(moving[:, None], npos, p)
         v = np.where(moving[:, None], nv, v)
     if cache is not None:
-        cache.put(key, {"slots": slots, "cycle": cycle, "k": np.maximum(k0, steps + 1),
-                        "p": p, "v": v, "prev": prev})
+        cache.put(key, {"t": t, "slots": slots, "cycle": cycle, "k": np.maximum(k0, steps + 1),
+                        "p": p, "v": v, "prev": prev}, continued=last)
     frac = (age - steps)[:, None]
     pos = prev + (p - prev) * frac
     # Fischer: strength = remaining life / initial life. A particle born at full strength
