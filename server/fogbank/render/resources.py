@@ -3,6 +3,8 @@ texture and the baked noise tiles (caches of their own, apart from the passes)."
 
 from __future__ import annotations
 
+import os
+import threading
 from collections import OrderedDict
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
@@ -37,6 +39,11 @@ SHADOW_MAPS = 3
 # the redraws are then what those looks cost a frame.
 SUNS_SEEN = 4 * SHADOW_MAPS
 NOISE_TILES = 4   # baked tiles kept per worker
+# the background bake's nice value (Linux sets it per thread): it takes the cores the
+# worker's raster threads leave. At the worker's own priority a 128^3 bake took a core from
+# the other streams' frames for its seconds (a stream beside a look reseeded every 6 s kept
+# 0.58-0.61 of its rate); the look that asked for the tile is the one that waits
+BAKE_NICE = 19
 
 
 @dataclass
@@ -189,6 +196,14 @@ class ShadowMaps:
         self._suns.clear()
 
 
+def _yield_cores() -> None:
+    """Run this thread at BAKE_NICE (where the OS has per-thread priorities, as Linux does)."""
+    try:
+        os.setpriority(os.PRIO_PROCESS, threading.get_native_id(), BAKE_NICE)
+    except (AttributeError, OSError):   # no setpriority (Windows): it bakes at the worker's priority
+        pass
+
+
 class NoiseTiles:
     """Baked noise tiles as 3D textures by (size, octaves, blur, seed), and a 1-texel
     stand-in for looks that sample no noise (baking a 128^3 tile takes seconds that a look
@@ -214,7 +229,7 @@ class NoiseTiles:
         fut = self._baking.get(key)
         if fut is None:
             if self._pool is None:
-                self._pool = ThreadPoolExecutor(1, thread_name_prefix="fogbank-bake")
+                self._pool = ThreadPoolExecutor(1, thread_name_prefix="fogbank-bake", initializer=_yield_cores)
             while len(self._baking) >= NOISE_TILES:   # a tile asked for and never taken
                 self._baking.popitem(last=False)[1].cancel()
             self._baking[key] = self._pool.submit(bake, *key)
