@@ -221,7 +221,6 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         log.info("renderer: %s", info)
         state["cache"] = StillCache(settings.stills_cache_mb << 20)
         state["stills"] = 0            # renders of distinct stills under way
-        state["stills_waiting"] = 0    # distinct stills waiting for one of max_stills places
         state["still_slots"] = asyncio.Semaphore(settings.max_stills)
         state["flights"] = {}          # ETag -> the task rendering it (single flight)
         state["too_costly"] = OrderedDict()   # ETags of stills stopped at their deadline (refused after)
@@ -321,12 +320,13 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             if refusal is not None:
                 metrics.ERRORS.labels("cost").inc()
                 raise RequestValidationError([dict(e, loc=[loc, *e["loc"][1:]]) for e in refusal.errors()])
-            if state["stills"] + state["stills_waiting"] >= settings.max_stills + settings.max_queued_stills:
+            # every distinct still in flight, rendering or waiting for a place: a task that
+            # ends in any way (cancelled before its first step too) leaves flights
+            if len(flights) >= settings.max_stills + settings.max_queued_stills:
                 metrics.ERRORS.labels("busy").inc()
                 raise HTTPException(503, f"{settings.max_stills} stills are rendering and "
                                     f"{settings.max_queued_stills} wait (FOGBANK_MAX_QUEUED_STILLS); retry shortly",
                                     headers={"Retry-After": "2"})
-            state["stills_waiting"] += 1   # counted now: the task may not run before the next ask
             flight = asyncio.get_running_loop().create_task(_render_still(still, fmt, etag))
             flights[etag] = flight
             flight.add_done_callback(lambda t, k=etag: (flights.pop(k, None), t.cancelled() or t.exception()))
@@ -352,8 +352,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         """One distinct still: a place among max_stills, then its worker job, waiting for
         both at most queue_timeout_s in all (so that every still is answered within
         queue_timeout_s + render_timeout_s: the proxy's read timeout is set above that,
-        docker/nginx/fogbank.conf); the result cached. It is counted in stills_waiting
-        already."""
+        docker/nginx/fogbank.conf); the result cached. It is in flights already."""
         t0 = asyncio.get_running_loop().time()
         try:
             await asyncio.wait_for(state["still_slots"].acquire(), settings.queue_timeout_s)
@@ -362,8 +361,6 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             raise HTTPException(503, f"this still waited {settings.queue_timeout_s:g} s for one of "
                                 f"{settings.max_stills} places to render; retry shortly",
                                 headers={"Retry-After": "5"}) from None
-        finally:
-            state["stills_waiting"] -= 1
         state["stills"] += 1
         try:
             waited = asyncio.get_running_loop().time() - t0
