@@ -1,4 +1,4 @@
-import os, sys, time
+import os, time
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 from fogbank.model import presets as P
 from fogbank.model.params import StillParams

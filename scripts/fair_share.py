@@ -3,7 +3,8 @@ finding 1): the default look at 640x360, playing, acknowledging every frame, for
 `seconds`; then the same while a second client plays a 16-layer volume-noise look at
 1920x1080 (and, with --reseed, changes its noise seed every 6 s; with --difference, the
 default look's "difference" teaching view at 1920x1080 instead). Prints frames per
-second, the longest gap between frames, and how many gaps passed 1 s. Starts its own
+second, the longest gap between frames, and how many gaps passed 1 s, and the cores each
+process of the server used meanwhile (the web process, each worker). Starts its own
 server on 127.0.0.1 (stopped by PID):
 
     .venv/bin/python scripts/fair_share.py [--seconds 20] [--reseed | --difference]
@@ -12,6 +13,7 @@ server on 127.0.0.1 (stopped by PID):
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
 import asyncio
 import json
@@ -21,6 +23,25 @@ from fogbank.model.params import FogParams
 from fogbank.model.urlstate import encode
 from fogbank.tools.bench_stream import _frames, _session
 from fogbank.tools.child import ChildServer
+from fogbank.workers import proctree
+
+TICK = os.sysconf("SC_CLK_TCK")
+
+
+def cpu_seconds(root: int) -> dict[str, float]:
+    """CPU seconds (user + system) of `root` and each descendant, by a readable name."""
+    out = {}
+    for pid in proctree.descendants(root):
+        try:
+            with open(f"/proc/{pid}/stat") as f:
+                fields = f.read().rsplit(")", 1)[1].split()
+            with open(f"/proc/{pid}/cmdline", "rb") as f:
+                cmd = f.read().replace(b"\0", b" ").decode(errors="replace")
+        except OSError:
+            continue
+        name = "web" if pid == root else ("tracker" if "resource_tracker" in cmd else "worker")
+        out[f"{name} {pid}"] = (int(fields[11]) + int(fields[12])) / TICK
+    return out
 
 
 def hostile_query() -> str:
@@ -77,7 +98,10 @@ async def main(seconds: float, reseed: bool, difference: bool = False) -> None:
         stop = asyncio.Event()
         h = asyncio.create_task(hostile(url, seconds, reseed, stop, difference))
         await asyncio.sleep(4.0)   # the hostile look's first frames (compile, bake)
+        c0, t0 = cpu_seconds(srv.proc.pid), asyncio.get_running_loop().time()
         beside = await watch(url, seconds)
+        c1, t1 = cpu_seconds(srv.proc.pid), asyncio.get_running_loop().time()
+        beside["cores"] = {k: round((c1[k] - c0[k]) / (t1 - t0), 2) for k in c1 if k in c0}
         stop.set()
         hf = await h
         print(json.dumps({"alone": alone, "beside_hostile": beside, "hostile": hf,

@@ -33,7 +33,7 @@ def cases():
     for k in (100, 300, 1000):
         yield f"sphere: optical depth 1 through the centre, eye at {k} R (R = 1 m), through the centre", \
             {"layers": [{"kind": "sphere", "center": [0, 0, 0], "radius": 1.0, "density": 0.75}]}, [k, 0, 0], [-1, 0, 0], 2.0 * k
-        yield f"sphere: the same, missing the centre by R/2", \
+        yield "sphere: the same, missing the centre by R/2", \
             {"layers": [{"kind": "sphere", "center": [0, 0, 0], "radius": 1.0, "density": 0.75}]}, \
             [k, 0, 0], (np.array([0, 0.5, 0]) - [k, 0, 0]).tolist(), 2.0 * k
     c = np.array([10.0, 5.0, -20.0])
