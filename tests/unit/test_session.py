@@ -701,3 +701,36 @@ def test_a_previews_budget_holds_the_drag_to_issue_13s_frame_rate_for_the_views_
     s = Session("a", now=0.0)
     s.apply(msg('{"type": "view", "width": 640, "height": 360}'), 0.0)
     assert s.preview_budget() == preview_budget_ms(640, 360)
+
+
+def test_a_view_that_teaches_is_held_to_the_budget_by_its_own_frames():
+    """Issue 33: the difference view (two fog passes and a 256-step raymarch) costs many
+    times the shaded frame the model prices, and its frames calibrated no level: by the
+    shaded frames' ratios it stayed at (or climbed to) levels whose frames took 200 ms and
+    more beside another stream. Its own frames now measure its levels."""
+    from fogbank.stream.session import PLAY_BUDGET_MS, PREVIEW_RUNGS
+    s = Session("a", now=0.0)
+    s.apply(msg('{"type": "view", "width": 960, "height": 540, "fps": 30}'), 0.0)
+    t = 0.0
+
+    def frames(n: int, factor: float) -> list[tuple[int, float]]:
+        nonlocal t
+        out = []
+        for _ in range(n):
+            job = s.start_frame(t, share=2)
+            ms = factor * job.estimate_ms
+            t += max(ms, 34.0) / 1000.0
+            s.measured(job, ms, t)
+            s.frame_done(job, sent=True)
+            s.apply(msg('{"type": "ack", "frame": %d}' % job.frame), t)
+            out.append((job.level, ms))
+        return out
+    shaded = frames(12, 1.0)
+    assert shaded[-1][0] == 0 or shaded[-1][1] <= PLAY_BUDGET_MS
+    s.apply(msg('{"type": "view", "width": 960, "height": 540, "fps": 30, "show": "difference"}'), t)
+    taught = frames(20, 3.0)
+    print("\nshaded (level, ms):", shaded[-3:], "difference:", taught[-3:])
+    # within its share of the budget, or as cheap as the ladder goes (the old code kept the
+    # shaded frames' level 5 at 223 ms)
+    cheapest = 1 + len(PREVIEW_RUNGS)
+    assert all(ms <= 1.25 * PLAY_BUDGET_MS / 2 or level == cheapest for level, ms in taught[-5:])

@@ -299,6 +299,13 @@ class Session:
             if (msg.width, msg.height) != (self.view.width, self.view.height):
                 self.level_ratios.clear()   # the levels are other sizes now
                 self.scenes_lost.clear()
+            def shown(v: ViewMsg) -> tuple:   # the layer matters to the optical depth only
+                return (v.show, v.layer if v.show == "optical_depth" else 0)
+            if shown(msg) != shown(self.view):
+                # a view that teaches costs otherwise than the shaded frame: its levels
+                # are measured anew, and its first frame's ratio replaces the session's
+                self.level_ratios.clear()
+                self.calibrated = False
             self.view = msg
             self.view_known = True
             self.dirty = True
@@ -656,7 +663,10 @@ class Session:
             self.cost_ratio = (math.exp(0.5 * math.log(self.cost_ratio) + 0.5 * math.log(r))
                                if self.calibrated else r)
             self.calibrated = True
-            if job.show == "shaded":   # a view that teaches costs otherwise
+            # each view's levels are its own (a view that teaches costs otherwise: the
+            # difference view climbed by the shaded frame's ratios to 200 ms frames beside a
+            # stream; issue 33)
+            if job.show == self.showing():
                 old = self.level_ratios.get(job.level)
                 fresh = old is not None and now - old[1] <= RATIO_TTL_S
                 self.level_ratios[job.level] = (math.sqrt(old[0] * r) if fresh else r, now)

@@ -57,6 +57,24 @@ PENDING_RETRY_S = 0.1   # a frame whose worker was not ready (a noise tile bakin
 # turn per costly frame); one that was idle comes back at most this far ahead of the others
 # (ms), so that a session paused for a minute does not then take the worker for a second
 FAIR_SLACK_MS = 300.0
+# ... and a frame longer than FAIR_FRAME_MS counts as more than its time, as many times
+# more as it is longer (at most FAIR_MAX_FACTOR; fair_charge): a 640x360 stream at 30
+# frames a second needs 0.8 of the worker, so equal shares beside a costly look left it
+# 0.4-0.6 of its rate; the costly look is the one made slower (issue 33: at least 0.7
+# kept). A 130 ms frame counts as 3.25 of its time; two equally costly looks still split
+# the worker evenly
+FAIR_FRAME_MS = 40.0
+FAIR_MAX_FACTOR = 8.0
+# a due session waits (the worker idle) up to this long for a session on its worker that has
+# used less worker time and is due by then: a stream's next frame is due 33 ms after its
+# last began, which took 26, and the 7 ms between went to a costly look's 130 ms frame
+# every time (turns by frame again: 65 frames each in 10 s, tests/unit/test_streaming_scheduler.py)
+FAIR_WAIT_S = 0.03
+
+
+def fair_charge(ms: float) -> float:
+    """What a frame of `ms` of worker time counts against its session's share."""
+    return ms * min(FAIR_MAX_FACTOR, max(1.0, ms / FAIR_FRAME_MS))
 
 
 class Client:
@@ -231,6 +249,10 @@ class Streamer:
                 continue
             if due > now:
                 soonest = due if soonest is None else min(soonest, due)
+                if due - now <= FAIR_WAIT_S:
+                    waiting.add(c.slot.index)   # the sessions after it on its worker wait for it
+                continue
+            if c.slot.index in waiting:
                 continue
             on = self.frames.get(c.slot.index, 0)
             if on < self.frames_per_worker:
@@ -281,7 +303,7 @@ class Streamer:
                 return
             render_ms, encode_ms = out["render_ms"], out["encode_ms"]
             client.stalls = 0
-            client.vtime += render_ms + encode_ms
+            client.vtime += fair_charge(render_ms + encode_ms)
             s.measured(job, render_ms, self.clock(), once=bool(out.get("once")),
                        scene_reused=out.get("scene_reused"), scene_warped=bool(out.get("scene_warped")))
             metrics.RENDER_MS.observe(render_ms)
