@@ -70,6 +70,13 @@ FAIR_MAX_FACTOR = 8.0
 # last began, which took 26, and the 7 ms between went to a costly look's 130 ms frame
 # every time (turns by frame again: 65 frames each in 10 s, tests/unit/test_streaming_scheduler.py)
 FAIR_WAIT_S = 0.03
+# ... but a session is held so at most this many times its last frame's time (or 1 s, not
+# measured) at a time: a stream of cheap frames at 60 frames a second is always due within
+# FAIR_WAIT_S, and a costly look whose frames count for more waited, the worker idle,
+# until the stream's share caught up with its (tens of seconds). Held at most 4 frames'
+# time, its frames take at least 1/5 of the worker while another session is always due
+# (at 2.5, the difference view beside a stream took enough to leave it 0.66 of its rate)
+FAIR_HOLD_FRAMES = 4.0
 
 
 def fair_charge(ms: float) -> float:
@@ -90,6 +97,7 @@ class Client:
         self.stalls = 0   # frames in a row that missed their deadline on a stalled worker
         self.spoke = False   # has sent a message
         self.vtime = 0.0     # ms of worker time its frames took (Streamer._pick's fair share)
+        self.held_since: float | None = None   # due, and held for a session due soon, since
         self.connected = now
 
     async def send_json(self, msg: dict[str, Any]) -> None:
@@ -242,6 +250,7 @@ class Streamer:
         order.sort(key=lambda c: c.vtime)
         soonest = None
         waiting: set[int] = set()   # workers with a due session that its room holds back
+        holding: set[int] = set()   # workers kept for a session due within FAIR_WAIT_S
         queued: list[Client] = []   # due sessions that may take a worker's queued place
         for c in order:
             due = c.session.next_due(now)
@@ -250,23 +259,30 @@ class Streamer:
             if due > now:
                 soonest = due if soonest is None else min(soonest, due)
                 if due - now <= FAIR_WAIT_S:
-                    waiting.add(c.slot.index)   # the sessions after it on its worker wait for it
+                    holding.add(c.slot.index)   # the sessions after it on its worker wait for it
                 continue
-            if c.slot.index in waiting:
-                continue
+            if c.slot.index in holding:
+                if c.held_since is None:
+                    c.held_since = now
+                last = c.session.last_ms
+                if now - c.held_since < (1.0 if last is None else FAIR_HOLD_FRAMES * last / 1000.0):
+                    continue
             on = self.frames.get(c.slot.index, 0)
             if on < self.frames_per_worker:
-                self._rr = (clients.index(c) + 1) % len(clients)
-                return c, None
+                return self._picked(c, clients), None
             if on < self.queue_room(c, now):
                 queued.append(c)
             else:
                 waiting.add(c.slot.index)
         for c in queued:   # in the same order (by worker time used): playing streams take turns
             if c.slot.index not in waiting:
-                self._rr = (clients.index(c) + 1) % len(clients)
-                return c, None
+                return self._picked(c, clients), None
         return None, soonest
+
+    def _picked(self, c: Client, clients: list[Client]) -> Client:
+        self._rr = (clients.index(c) + 1) % len(clients)
+        c.held_since = None
+        return c
 
     async def _run(self) -> None:
         while True:
