@@ -284,3 +284,4 @@ def test_allowed_hosts_add_the_bound_address_and_take_a_star():
     assert host_allowed("anything", allowed_hosts("*", "0.0.0.0"))
     assert host_allowed("10.0.0.1:80", hosts, address_too=True) and not host_allowed("10.0.0.1:80", hosts)
     assert not host_allowed("evil.org", hosts, address_too=True)
+    assert host_allowed(None, hosts, address_too=True)   # an HTTP/1.0 probe without Host

@@ -334,3 +334,15 @@ def test_a_frame_whose_noise_tile_bakes_is_asked_again_shortly_not_sent():
     assert c.session.wants_frame(5.0) is True
     assert c.session.next_due(5.0) == 5.0 + PENDING_RETRY_S
     assert st.frames[0] == 0
+
+
+def test_cheap_streams_on_one_worker_are_not_held_for_each_other():
+    """Found by review: the hold for a session due soon held any frame, so a stream of
+    10 ms frames beside one of 2 ms frames at 60 frames a second drew 12 frames a second
+    of its 30 with the worker three quarters idle. Only a frame over FAIR_FRAME_MS that
+    would still run when the other is due waits."""
+    drawn, _ = _share({"a": 2.0, "b": 10.0}, {"a": 60, "b": 30}, 10.0)
+    print(f"\n2 ms at 60 fps beside 10 ms at 30 fps: {drawn}")
+    assert drawn["a"] >= 0.95 * 600 and drawn["b"] >= 0.95 * 300
+    drawn, _ = _share({"a": 5.0, "b": 8.0}, {"a": 30, "b": 30}, 10.0)
+    assert drawn["a"] >= 0.95 * 300 and drawn["b"] >= 0.95 * 300

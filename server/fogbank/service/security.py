@@ -85,11 +85,11 @@ def allowed_hosts(listed: str, bind_host: str) -> frozenset[str]:
 
 def host_allowed(host: str | None, allowed: frozenset[str], address_too: bool = False) -> bool:
     """Whether `host` (a Host header) names one of `allowed`; with `address_too`, any IP
-    address passes as well (PROBE_PATHS)."""
+    address, or no Host at all, passes as well (PROBE_PATHS)."""
     if "*" in allowed:
         return True
-    if not host:
-        return False
+    if not host:   # an HTTP/1.0 health check may send none; a browser always sends one
+        return address_too
     try:
         name = urlsplit("//" + host).hostname   # "[::1]:8000" -> "::1"
     except ValueError:

@@ -158,6 +158,11 @@ class FrameJob:
     level: int = 0         # its quality: Session._refinement's level (a preview's rung's)
 
 
+
+def _shown(show: str, layer: int) -> tuple[str, int]:
+    """What a view shows, for its costs: the layer matters to the optical depth only."""
+    return (show, layer if show == "optical_depth" else 0)
+
 class Session:
     def __init__(self, sid: str, now: float, query: str = ""):
         self.id = sid
@@ -299,9 +304,7 @@ class Session:
             if (msg.width, msg.height) != (self.view.width, self.view.height):
                 self.level_ratios.clear()   # the levels are other sizes now
                 self.scenes_lost.clear()
-            def shown(v: ViewMsg) -> tuple:   # the layer matters to the optical depth only
-                return (v.show, v.layer if v.show == "optical_depth" else 0)
-            if shown(msg) != shown(self.view):
+            if _shown(msg.show, msg.layer) != _shown(self.view.show, self.view.layer):
                 # a view that teaches costs otherwise than the shaded frame: its levels
                 # are measured anew, and its first frame's ratio replaces the session's
                 self.level_ratios.clear()
@@ -655,7 +658,9 @@ class Session:
             return
         self.last_ms = render_ms
         self.last_level = job.level if job.full else None
-        if job.estimate_ms > 0 and not surprised and not scene_warped:   # raw estimate: measured / estimated, smoothed
+        # a frame of the view shown before a switch calibrates nothing of the view now shown
+        same_view = _shown(job.show, job.layer) == _shown(self.showing(), self.view.layer)
+        if job.estimate_ms > 0 and not surprised and not scene_warped and same_view:   # raw estimate: measured / estimated, smoothed
             r = min(max(render_ms / job.estimate_ms, 0.05), 20.0)
             # the first measurement replaces the prior: smoothed with 1.0, a look the model
             # underestimates twice over was still underestimated by 1.4 on the next frame
@@ -666,10 +671,9 @@ class Session:
             # each view's levels are its own (a view that teaches costs otherwise: the
             # difference view climbed by the shaded frame's ratios to 200 ms frames beside a
             # stream; issue 33)
-            if job.show == self.showing():
-                old = self.level_ratios.get(job.level)
-                fresh = old is not None and now - old[1] <= RATIO_TTL_S
-                self.level_ratios[job.level] = (math.sqrt(old[0] * r) if fresh else r, now)
+            old = self.level_ratios.get(job.level)
+            fresh = old is not None and now - old[1] <= RATIO_TTL_S
+            self.level_ratios[job.level] = (math.sqrt(old[0] * r) if fresh else r, now)
         if job.full:
             return
         # a rung's cost: its frames' running mean (a quarter each), so that a drag whose
