@@ -269,8 +269,8 @@ def test_sessions_share_a_worker_by_time_not_by_turns():
     from fogbank.stream.streaming import FAIR_SLACK_MS
     drawn, st = _share({"a": 20.0, "b": 500.0}, {"a": 120, "b": 120}, 10.0)
     print("\nframes in 10 s of worker time:", drawn)
-    assert drawn["b"] >= 2                                   # the costly look is drawn, slower
-    assert drawn["a"] * 20.0 / 10_000.0 >= 0.8                # turns by frame gave 1:1, equal time 0.5
+    assert drawn["b"] >= 5                                   # the costly look is drawn, slower
+    assert drawn["a"] * 20.0 / 10_000.0 >= 0.7                # turns by frame gave 1:1, equal time 0.5
     cheap, costly = st.clients["a"], st.clients["b"]
     # a session idle while the others drew comes back FAIR_SLACK_MS ahead at most
     idle = _client(st, "c")

@@ -61,10 +61,11 @@ FAIR_SLACK_MS = 300.0
 # more as it is longer (at most FAIR_MAX_FACTOR; fair_charge): a 640x360 stream at 30
 # frames a second needs 0.8 of the worker, so equal shares beside a costly look left it
 # 0.4-0.6 of its rate; the costly look is the one made slower (issue 33: at least 0.7
-# kept). A 130 ms frame counts as 3.25 of its time; two equally costly looks still split
-# the worker evenly
+# kept). A 130 ms frame counts as 3 times its time; two equally costly looks still split
+# the worker evenly. At most 8 times, a 16-layer look's 600 ms frames came 10 s apart
+# beside a stream (its first frames take up to QUIET_FIRST_MS)
 FAIR_FRAME_MS = 40.0
-FAIR_MAX_FACTOR = 8.0
+FAIR_MAX_FACTOR = 3.0
 # a due session waits (the worker idle) up to this long for a session on its worker that has
 # used less worker time and is due by then: a stream's next frame is due 33 ms after its
 # last began, which took 26, and the 7 ms between went to a costly look's 130 ms frame
