@@ -100,62 +100,60 @@ def test_a_particle_continued_from_its_last_step_is_the_one_integrated_from_its_
                 assert np.array_equal(a[1], b[1]) == True   # noqa: E712
 
 
-def test_a_frame_later_takes_a_step_or_two_not_the_whole_lives():
-    """Counted, not timed: the steps integrated (hash chains of jitter) for a frame 1/30 s
-    after the last, with the cache, against from birth."""
+def _count_chains(monkeypatch) -> dict:
+    """Count the hash chains simulate draws (a step integrated is one), once `start` is
+    called: {"n": the count, "start": a function}."""
     from fogbank.kinds import particle_motion as pm
-    layer = Particles(count=64, life_min=500, life_max=1000, step=0.05, seed=3)
     calls = {"n": 0}
     real = pm._chain
 
     def counting(h, *keys):
         calls["n"] += 1
         return real(h, *keys)
+    calls["start"] = lambda: monkeypatch.setattr(pm, "_chain", counting)
+    return calls
+
+
+def test_a_frame_later_takes_a_step_or_two_not_the_whole_lives(monkeypatch):
+    """Counted, not timed: the steps integrated (hash chains of jitter) for a frame 1/30 s
+    after the last, with the cache, against from birth."""
+    from fogbank.kinds import particle_motion as pm
+    layer = Particles(count=64, life_min=500, life_max=1000, step=0.05, seed=3)
+    calls = _count_chains(monkeypatch)
     cache = pm.Trajectories()
     simulate(layer, 100.0, WIND, terrain.height, cache=cache)
-    pm._chain = counting
-    try:
-        simulate(layer, 100.0 + 1 / 30, WIND, terrain.height, cache=cache)
-        continued = calls["n"]
-        calls["n"] = 0
-        simulate(layer, 100.0 + 1 / 30, WIND, terrain.height, cache=None)
-        from_birth = calls["n"]
-    finally:
-        pm._chain = real
+    calls["start"]()
+    simulate(layer, 100.0 + 1 / 30, WIND, terrain.height, cache=cache)
+    continued = calls["n"]
+    calls["n"] = 0
+    simulate(layer, 100.0 + 1 / 30, WIND, terrain.height, cache=None)
+    from_birth = calls["n"]
     # per call: 6 draws at birth (life, cone, box), the particles' own chain, and one
     # chain (three draws) per step integrated
     assert continued <= 7 + 2
     assert from_birth >= 7 + 500
 
 
-def test_sessions_at_different_times_each_continue_their_own_trajectories():
+def test_sessions_at_different_times_each_continue_their_own_trajectories(monkeypatch):
     """Two sessions play one look on a worker, each at its own time, frames in turn: each
     frame takes a step or two from its own session's last state. With one state per
     layer, each found the other's later one and integrated every life again (20 ms a
     frame of the default look: a 640x360 stream beside any other session, 26 -> 46 ms)."""
     from fogbank.kinds import particle_motion as pm
     layer = Particles(count=64, life_min=500, life_max=1000, step=0.05, seed=3)
-    calls = {"n": 0}
-    real = pm._chain
-
-    def counting(h, *keys):
-        calls["n"] += 1
-        return real(h, *keys)
+    calls = _count_chains(monkeypatch)
     cache = pm.Trajectories()
     simulate(layer, 100.0, WIND, terrain.height, cache=cache)
     simulate(layer, 200.0, WIND, terrain.height, cache=cache)
-    pm._chain = counting
-    try:
-        per_frame = []
-        for i in range(1, 4):
-            for start in (100.0, 200.0):
-                calls["n"] = 0
-                got = simulate(layer, start + i / 30, WIND, terrain.height, cache=cache)
-                per_frame.append(calls["n"])
-                want = simulate(layer, start + i / 30, WIND, terrain.height, cache=None)
-                assert np.array_equal(got[0], want[0]) == True   # noqa: E712
-    finally:
-        pm._chain = real
+    calls["start"]()
+    per_frame = []
+    for i in range(1, 4):
+        for start in (100.0, 200.0):
+            calls["n"] = 0
+            got = simulate(layer, start + i / 30, WIND, terrain.height, cache=cache)
+            per_frame.append(calls["n"])
+            want = simulate(layer, start + i / 30, WIND, terrain.height, cache=None)
+            assert np.array_equal(got[0], want[0]) == True   # noqa: E712
     # at most one step per particle (each takes its next step at its own moment), against
     # over 500 from birth
     assert max(per_frame) <= 7 + layer.count
