@@ -8,6 +8,7 @@ link (urlstate.decode), never with what a page reported."""
 
 from __future__ import annotations
 
+import json
 import time
 from urllib.parse import parse_qsl, urlsplit
 
@@ -17,6 +18,7 @@ from domain import long_look
 from fogbank.model.params import FogParams
 from fogbank.model.urlstate import LONG_QUERY, decode, encode
 from fogbank.settings import Settings
+from pages import drag_view
 from test_page import new_page, wait_frames
 
 # every control of the panel: its path, its kind and what it shows
@@ -120,3 +122,64 @@ def test_a_100k_link_gets_the_page_that_explains(server, browser):
         f"It is {len(target):,} characters long; this server takes links of at most {limit:,} characters."
     assert "Copy link" in page.locator("main").inner_text()
     page.context.close()
+
+
+def _looks_and_cameras():
+    """Looks (presets, another scene, a camera at the default's values) and cameras to put
+    in them, as (look, camera) pairs."""
+    from fogbank.model import presets as P
+    looks = [FogParams.model_validate(P.preset_dict(n)) for n in ("default", "biri-fig7", "fischer-smoke")]
+    looks.append(looks[1].model_copy(update={"scene": "calibration"}))
+    base_cam = looks[0].camera
+    cams = [base_cam, base_cam.model_copy(update={"yaw": 12.5}),
+            base_cam.model_copy(update={"position": (1.0, 30.0, -2.5), "pitch": -20.0, "fov": 40.0}),
+            looks[1].camera]
+    return [(look, cam) for look in looks for cam in cams]
+
+
+def test_a_camera_reply_is_spliced_into_the_query_as_the_server_writes_it(server, browser):
+    """Issue 34, finding 1: a camera message is answered with the camera's keys of the
+    canonical query (urlstate.encode_field), not the look; the page splices them into the
+    query it holds (links.js withCamera). The reference is the server's encode of the whole
+    new look, for looks with and without camera keys, another scene, and a camera back at
+    the default's values (no keys at all)."""
+    from fogbank.model.urlstate import encode_field
+    page = new_page(browser, server.url + "/?v=1")
+    cases = []
+    for look, cam in _looks_and_cameras():
+        new = look.model_copy(update={"camera": cam})
+        cases.append([encode(look), encode_field(new, "camera"), encode(new)])
+    got = page.evaluate("""async (cases) => {
+      const { withCamera } = await import('/static/links.js');
+      return cases.map(([q, part]) => withCamera(q, part));
+    }""", cases)
+    assert got == [want for _, _, want in cases]
+    page.close()
+
+
+def test_orbiting_a_long_look_sends_cameras_not_looks_and_the_address_follows(server, browser):
+    """Issue 34, finding 1, in the page: a 16-layer look (its state about 20 KB) dragged;
+    every reply the page read during the drag is a camera reply of a few hundred bytes, and
+    the address bar's look is the server's canonical encoding of the look confirmed."""
+    from fogbank.tools.link import sixteen_layer_query
+    page = new_page(browser, server.url + "/?" + sixteen_layer_query())
+    wait_frames(page, 2)
+    page.evaluate("""() => { window.__texts = [];
+      const ws = window.fogbank.stream.ws;
+      ws.addEventListener('message', (e) => { if (typeof e.data === 'string') window.__texts.push(e.data); }); }""")
+    drag_view(page, -10, 2)
+    page.wait_for_function("window.fogbank.store.get().confirmed.params.camera.yaw !== undefined")
+    time.sleep(1.0)
+    texts = page.evaluate("window.__texts")
+    kinds = [json.loads(t)["type"] for t in texts]
+    assert kinds.count("camera") >= 3
+    assert max(len(t) for t, k in zip(texts, kinds) if k == "camera") < 400
+    assert "state" not in kinds
+    confirmed = page.evaluate("window.fogbank.store.get().confirmed")
+    want = encode(FogParams.model_validate(confirmed["params"]))
+    assert confirmed["query"].split("&play")[0] == want
+    search = page.evaluate("location.search")
+    assert search.startswith("?z=")   # long: the compact form of the same query
+    value, _ = decode(search[1:].split("&aspect")[0])
+    assert FogParams.model_validate(value) == FogParams.model_validate(confirmed["params"])
+    page.close()

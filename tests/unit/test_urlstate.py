@@ -334,3 +334,17 @@ def test_the_page_compacts_past_the_same_length():
     js = (STATIC_DIR / "links.js").read_text()
     assert re.search(r"export const LONG_QUERY = (\d+);", js)[1] == str(LONG_QUERY)
     assert re.search(r"const BESIDE_Z = new Set\(\[([^\]]*)\]\)", js)[1] == ", ".join(f'"{k}"' for k in BESIDE_Z)
+
+
+@pytest.mark.parametrize("name", ["default", "biri-fig7", "fischer-smoke"])
+def test_a_fields_keys_are_exactly_its_keys_in_the_whole_query(name):
+    """encode_field (a camera reply's query, issue 34): the `camera.` keys of the whole
+    canonical query, in order, for a preset's camera, a moved one, and the default's."""
+    from fogbank.model.urlstate import encode_field
+    look = FogParams.model_validate(P.preset_dict(name))
+    for cam in (look.camera, look.camera.model_copy(update={"yaw": -7.25, "fov": 44.0}),
+                FogParams.model_validate(P.preset_dict("default")).camera):
+        new = look.model_copy(update={"camera": cam})
+        whole = [kv for kv in encode(new).split("&") if kv.startswith("camera.")]
+        part = encode_field(new, "camera")
+        assert (part.split("&") if part else []) == whole

@@ -197,6 +197,15 @@ def encode(params: FogParams, base: str = "default") -> str:
     return "&".join(f"{k}={quote(v, safe=_SAFE)}" for k, v in pairs)
 
 
+def encode_field(params: FogParams, name: str, base: str = "default") -> str:
+    """The keys of `encode(params, base)` under the top-level field `name` (for example
+    every `camera.` key), in the same order and form: the part of the canonical query that a
+    change of that field alone changes. A client splices it into the query it holds."""
+    pairs: list[tuple[str, str]] = []
+    _diff(type(params), {name: getattr(params, name).model_dump(mode="json")}, P.preset_dict(base), "", pairs)
+    return "&".join(f"{k}={quote(v, safe=_SAFE)}" for k, v in pairs)
+
+
 # ---------------------------------------------------------------- compact form
 
 

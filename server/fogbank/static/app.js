@@ -6,7 +6,7 @@
 import { Stream } from "./stream.js";
 import { Controls, buildPatch } from "./controls.js";
 import { UndoStack } from "./undo.js";
-import { compactQuery, isLong } from "./links.js";
+import { compactQuery, isLong, withCamera } from "./links.js";
 import { functionEditor } from "./editor.js";
 import { rayPlot } from "./rayplot.js";
 import { CameraInput } from "./camera.js";
@@ -171,7 +171,7 @@ stream.addEventListener("hello", (e) => {
   }
 });
 stream.addEventListener("state", (e) => {
-  const { type, ...confirmed } = e.detail;
+  const { type, answers, ...confirmed } = e.detail;
   store.update((s) => {
     // keep the camera being dragged, and edits not yet sent
     const shown = s.interacting && s.params ? { ...confirmed.params, camera: s.params.camera } : confirmed.params;
@@ -182,6 +182,17 @@ stream.addEventListener("state", (e) => {
     controls.render(s.params);
     store.set({ redrawNext: false });
   }
+});
+// A camera message's reply: the version and the camera alone (not the look), applied to
+// the look last confirmed, its query spliced (links.js withCamera)
+stream.addEventListener("camera", (e) => {
+  const { version, camera, query } = e.detail;
+  store.update((s) => {
+    if (!s.confirmed) return {};
+    const confirmed = { ...s.confirmed, version, query: withCamera(s.confirmed.query, query),
+      params: { ...s.confirmed.params, camera } };
+    return s.interacting ? { confirmed } : { confirmed, params: { ...s.params, camera } };
+  });
 });
 // the panel shows the look on screen: every change of it (a drag, an edit, a confirmed
 // state) sets the controls in place, and rebuilds the form when its shape changed

@@ -42,3 +42,17 @@ export async function compactQuery(query) {
   const bytes = new Uint8Array(await new Response(deflated).arrayBuffer());
   return [`z=${base64url(bytes)}`, ...beside].join("&");
 }
+
+// The canonical query with its camera keys replaced by `cameraPart` (the server's reply to
+// a camera message: its `camera.` keys, server/fogbank/model/urlstate.py encode_field).
+// The canonical query writes the look's fields in the params model's order, and only
+// `scene` comes before `camera` (after `v` and `preset`), so the camera's keys go right
+// after those.
+const BEFORE_CAMERA = new Set(["v", "preset", "scene"]);
+export function withCamera(query, cameraPart) {
+  const parts = query.split("&").filter((p) => p && !keyOf(p).startsWith("camera."));
+  let at = 0;
+  while (at < parts.length && BEFORE_CAMERA.has(keyOf(parts[at]))) at++;
+  parts.splice(at, 0, ...cameraPart.split("&").filter(Boolean));
+  return parts.join("&");
+}

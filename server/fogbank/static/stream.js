@@ -91,8 +91,11 @@ export class Stream extends EventTarget {
   async onMessage(ev) {
     if (typeof ev.data === "string") {
       const msg = JSON.parse(ev.data);
-      if (msg.type === "state" && this.sendTimes.length) {
-        this.versionTimes.set(msg.version, this.sendTimes.shift());
+      if (msg.type === "state" || msg.type === "camera") {
+        // a reply answers `answers` look changes (several collapse into one reply while
+        // frames are in flight), each of which made one version, the last this one
+        const n = Math.min(msg.answers ?? 1, this.sendTimes.length);
+        this.sendTimes.splice(0, n).forEach((t, i) => this.versionTimes.set(msg.version - (n - 1 - i), t));
       }
       if (msg.type === "error" && this.sendTimes.length) this.sendTimes.shift();
       this.dispatchEvent(new CustomEvent(msg.type, { detail: msg }));

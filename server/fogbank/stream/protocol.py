@@ -13,10 +13,19 @@ Client -> server, one JSON object per text message, told apart by "type":
     {"type": "interact", "active": true}                   a drag started/ended
     {"type": "ack", "frame": 17}                           frames up to 17 arrived
 
-Server -> client: text {"type": "hello" | "state" | "error" | "view_stats", ...} and
+Server -> client: text {"type": "hello" | "state" | "camera" | "error" | "view_stats", ...} and
 binary frames (a view that teaches, render/teach.py, sends its numbers and legend as
 "view_stats" just before its frame):
 HEADER (little-endian, 36 bytes) followed by the JPEG.
+
+    {"type": "state", "version": 7, "query": "...", "params": {...}, "playing": true,
+     "speed": 1.0, "time": 3.2, "view": {...}, "answers": 2}        the whole look
+    {"type": "camera", "version": 8, "camera": {...}, "query": "camera.yaw=12",
+     "answers": 1}                                 a camera message's reply: the camera alone
+
+A reply to look changes waits while MAX_IN_FLIGHT frames are unacknowledged; the changes
+made meanwhile collapse into one reply, which `answers` of them (query, params, camera,
+seek messages; 0 for play and speed).
 """
 
 from __future__ import annotations

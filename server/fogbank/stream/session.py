@@ -20,7 +20,7 @@ from fogbank.model import presets as P
 from fogbank.model.params import FogParams, StillParams
 from fogbank.stream.protocol import (AckMsg, CameraMsg, InteractMsg, ParamsMsg, PlayMsg, QueryMsg, SeekMsg,
                        SpeedMsg, ViewMsg)
-from fogbank.model.urlstate import URLError, decode_lenient, encode, view_state, view_suffix
+from fogbank.model.urlstate import URLError, decode_lenient, encode, encode_field, view_state, view_suffix
 
 MAX_IN_FLIGHT = 2
 INPUT_SETTLE_S = 0.25     # after the last input, this long until the full-quality refinement
@@ -237,6 +237,13 @@ class Session:
                 "params": self.fog.model_dump(mode="json"), "playing": self.playing,
                 "speed": self.speed, "time": self.sim_time(now), "view": self.view.model_dump()}
 
+    def camera_state(self) -> dict[str, Any]:
+        """The reply to a camera message: the version and the camera alone (its canonical
+        form, and its keys of the canonical query, which the client splices into the query
+        it holds), not the look: a look of many layers is tens of KB, its camera 100 bytes."""
+        return {"type": "camera", "version": self.version, "camera": self.fog.camera.model_dump(mode="json"),
+                "query": encode_field(self.fog, "camera")}
+
     def _set_fog(self, fog: FogParams, now: float, *, input_: bool = True) -> None:
         if fog.time != self.fog.time:   # a new time in the look is a seek
             self._rebase(now, fog.time)
@@ -273,7 +280,8 @@ class Session:
                 base = None if getattr(msg, "replace", False) else self.fog.model_dump(mode="json")
                 fog = P.patched(patch, base)
                 self._set_fog(fog, now)
-                return [self.state(now)]
+                # a camera patch changes the camera alone: its reply is the camera's
+                return [self.camera_state() if isinstance(msg, CameraMsg) else self.state(now)]
         except ValidationError as exc:
             prefix = ["params"] if isinstance(msg, ParamsMsg) else []
             errs = [errors.clean(e) for e in errors.from_validation(exc, prefix)]

@@ -7,7 +7,9 @@ the next due session in round-robin order, with at most `frames_per_worker` fram
 each worker (and one more for a stream that only plays: Streamer.queue_room). Each frame
 is a snapshot of its session (latest wins); the worker renders and JPEG-encodes it, and
 the bytes go out as header + JPEG. A session never has more than MAX_IN_FLIGHT frames
-unacknowledged, so a slow client gets fewer frames, never older ones.
+unacknowledged, so a slow client gets fewer frames, never older ones. The replies to
+look changes wait in that window too (Client.owe): a camera message is answered with the
+camera alone, and changes made while the window is full collapse into one reply.
 
 A frame past its deadline kills its worker (the supervisor's rule). When the worker was
 busy with it throughout, the look is too costly: the session that asked for it is paused
@@ -36,14 +38,18 @@ from fogbank.workers import cost
 from fogbank.service import metrics
 
 from fogbank.workers import worker
-from fogbank.stream.protocol import (FLAG_FULL, FLAG_PLAYING, FLAG_REDUCED, MAX_MESSAGE, PROTOCOL, ProtocolError, QueryMsg,
-                       frame_header, parse)
-from fogbank.stream.session import PLAY_BUDGET_MS, REFINE_BUDGET_MS, FrameJob, Session
+from fogbank.stream.protocol import (FLAG_FULL, FLAG_PLAYING, FLAG_REDUCED, MAX_MESSAGE, PROTOCOL, CameraMsg,
+                                     ParamsMsg, ProtocolError, QueryMsg, SeekMsg, frame_header, parse)
+from fogbank.stream.session import MAX_IN_FLIGHT, PLAY_BUDGET_MS, REFINE_BUDGET_MS, FrameJob, Session
 from fogbank.workers.supervisor import DeadlineExceeded, Slot, Supervisor, WorkerError
 
 log = logging.getLogger("fogbank.stream")
 
 
+# replies that wait for room in the window and collapse (Client.owe), and the messages that
+# change the look, each counted in the reply's "answers"
+OWED = ("state", "camera")
+LOOK_CHANGES = (QueryMsg, ParamsMsg, CameraMsg, SeekMsg)
 IDLE_CLOSE = 4408   # closed for inactivity (no messages, or frames left unacknowledged)
 SHARE_RECENT_S = 1.0   # a playing session that started a frame this recently shares its worker (Streamer.sharing)
 QUEUE_MAX_MS = 60.0   # a frame costlier than this is never queued behind another (Streamer.queue_room)
@@ -100,6 +106,27 @@ class Client:
         self.vtime = 0.0     # ms of worker time its frames took (Streamer._pick's fair share)
         self.held_since: float | None = None   # due, and held for a session due soon, since
         self.connected = now
+        # The reply owed to look changes and not sent yet ("camera" or "state"; a "state"
+        # covers a camera), and how many look changes it answers. Replies go out only while
+        # the flow-control window has room (or just before a frame), so text never queues
+        # behind a slow link, and changes made meanwhile collapse into one reply.
+        self.owed: str | None = None
+        self.owed_answers = 0
+
+    def owe(self, kind: str, answers: int) -> None:
+        self.owed = "state" if "state" in (kind, self.owed) else kind
+        self.owed_answers += answers
+
+    async def pay(self, now: float, force: bool = False) -> None:
+        """Send the owed reply, built from the session as it is now, if fewer than
+        MAX_IN_FLIGHT frames are unacknowledged (or `force`: a frame follows it)."""
+        s = self.session
+        if self.owed is None or (not force and s.sent - s.acked >= MAX_IN_FLIGHT):
+            return
+        msg = s.state(now) if self.owed == "state" else s.camera_state()
+        msg["answers"] = self.owed_answers
+        self.owed, self.owed_answers = None, 0
+        await self.send_json(msg)
 
     async def send_json(self, msg: dict[str, Any]) -> None:
         # ASCII JSON: user text echoed in an error (a field name, a value) may hold lone
@@ -352,6 +379,7 @@ class Streamer:
             # encodes differ): this one is stale, drop it rather than show the past
             if not client.closed and job.frame > s.sent:
                 s.sent = job.frame
+                await client.pay(self.clock(), force=True)   # the look's reply before its frame
                 if out.get("stats"):   # a view that teaches: its numbers and legend first
                     await client.send_json({"type": "view_stats", "frame": job.frame, **out["stats"]})
                 await client.send_bytes(header + out["data"])
@@ -555,7 +583,12 @@ async def websocket_endpoint(ws: WebSocket, streamer: Streamer, renderer_info: d
                 continue
             acked = session.acked
             for out in session.apply(parsed, streamer.clock()):
-                await client.send_json(out)
+                if out["type"] in OWED:
+                    client.owe(out["type"], int(isinstance(parsed, LOOK_CHANGES)))
+                else:   # an error: the replies before it first, in order
+                    await client.pay(streamer.clock(), force=True)
+                    await client.send_json(out)
+            await client.pay(streamer.clock())
             if session.acked != acked:   # progress: the oldest unacknowledged frame is newer
                 client.unacked_since = None if session.acked >= session.sent else streamer.clock()
             streamer.wake()

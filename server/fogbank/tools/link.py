@@ -1,0 +1,124 @@
+"""The stream as a remote viewer meets it (issue 34): a client that does what the page does
+while orbiting (a camera message each animation frame, 60 a second, every frame
+acknowledged on arrival) through a thin link (tools/relay.py), and what it measured: frames
+a second, control-to-frame latency, and the bytes of text and of frames a second."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import struct
+import time
+
+import websockets
+
+from fogbank.tools.relay import Relay
+
+
+def sixteen_layer_query() -> str:
+    """Issue 34's costly state: 16 cosine layers of 8 terms each (its `state` was 20.6 KB)."""
+    from fogbank.model import presets as P
+    from fogbank.model.params import FogParams
+    from fogbank.model.urlstate import encode
+    terms = [{"amp": 0.1, "k": [0.01 * (i + 1), 0.02, 0.013 * (i + 2)], "phase": 0.3 * i} for i in range(8)]
+    layers = [{"kind": "cosine", "density": 0.0004, "c0": 1.0, "terms": terms} for _ in range(16)]
+    look = FogParams.model_validate({**P.preset_dict("default"), "layers": layers})
+    return encode(look)
+
+
+async def orbit(url: str, query: str, seconds: float, size=(640, 360), hz: float = 60.0,
+                step_deg: float = 0.5, settle_s: float = 2.0) -> dict:
+    """Open /ws?query at `size`, wait `settle_s` for the look, then orbit for `seconds`: a
+    camera message (yaw + step_deg) every 1/hz s inside an interaction, each frame acked as it
+    arrives. Latency is the page's: a frame's arrival less the send time of the camera message
+    its params version includes (each accepted camera message is one version)."""
+    ws_url = url.replace("http", "ws", 1) + "/ws?" + query
+    async with websockets.connect(ws_url, max_size=2**24) as ws:
+        hello = json.loads(await ws.recv())
+        state = json.loads(await ws.recv())
+        await ws.send(json.dumps({"type": "view", "width": size[0], "height": size[1], "fps": 30}))
+        yaw = state["params"]["camera"].get("yaw", 0.0)
+        version0 = state["version"]
+        sent: dict[int, float] = {}
+        frames: list[tuple[float, int]] = []   # (arrival, bytes)
+        texts: list[tuple[float, int]] = []
+        lags: list[float] = []
+        errors: list[str] = []
+        orbiting = False
+        t_start = time.monotonic()
+
+        async def reader():
+            while True:
+                m = await ws.recv()
+                now = time.monotonic()
+                if isinstance(m, bytes):
+                    frame, version = struct.unpack_from("<II", m, 4)
+                    await ws.send(json.dumps({"type": "ack", "frame": frame}))
+                    if orbiting:
+                        frames.append((now, len(m)))
+                        if version in sent:
+                            lags.append(now - sent[version])
+                else:
+                    if orbiting:
+                        texts.append((now, len(m.encode())))
+                    msg = json.loads(m)
+                    if msg.get("type") == "error":
+                        errors.append(msg.get("msg", ""))
+
+        task = asyncio.create_task(reader())
+        try:
+            await asyncio.sleep(settle_s)
+            orbiting = True
+            await ws.send(json.dumps({"type": "interact", "active": True}))
+            t0 = time.monotonic()
+            i = 0
+            while time.monotonic() - t0 < seconds:
+                i += 1
+                yaw = (yaw + step_deg) % 360.0
+                sent[version0 + i] = time.monotonic()
+                await ws.send(json.dumps({"type": "camera", "camera": {"yaw": round(yaw, 3)}}))
+                await asyncio.sleep(max(0.0, t0 + i / hz - time.monotonic()))
+            t1 = time.monotonic()
+            await ws.send(json.dumps({"type": "interact", "active": False}))
+        finally:
+            task.cancel()
+            with _quiet():
+                await task
+    span = t1 - t0
+    in_span = [b for t, b in frames if t <= t1]
+    lags_sorted = sorted(lags)
+
+    def pct(p):
+        return lags_sorted[min(len(lags_sorted) - 1, int(p * len(lags_sorted)))] * 1000 if lags_sorted else None
+    half = [lag for (t, _), lag in zip(frames, lags) if t > t0 + span / 2]
+    return {"seconds": round(span, 2), "fps": round(len(in_span) / span, 2),
+            "lag_p50_ms": pct(0.5), "lag_p95_ms": pct(0.95),
+            "lag_p95_second_half_ms": (sorted(half)[int(0.95 * (len(half) - 1))] * 1000) if half else None,
+            "text_mbps": round(sum(b for t, b in texts if t <= t1) * 8 / span / 1e6, 3),
+            "frame_mbps": round(sum(in_span) * 8 / span / 1e6, 3),
+            "texts": len(texts), "frames": len(in_span), "messages": i,
+            "renderer": hello.get("renderer"), "errors": errors[:3], "started": t_start}
+
+
+class _quiet:
+    def __enter__(self):
+        return self
+
+    def __exit__(self, kind, exc, tb):
+        return kind is not None and issubclass(kind, (asyncio.CancelledError, websockets.ConnectionClosed))
+
+
+def orbit_through(server_url: str, query: str, rate_bps: float | None, rtt_ms: float, seconds: float,
+                  size=(640, 360)) -> dict:
+    """`orbit` through a Relay to the server at `server_url` (rate None: loopback, no relay)."""
+    if rate_bps is None and not rtt_ms:
+        return asyncio.run(orbit(server_url, query, seconds, size))
+    port = int(server_url.rsplit(":", 1)[1])
+    with Relay(port, rate_bps, rtt_ms) as relay:
+        return asyncio.run(orbit(relay.url, query, seconds, size))
+
+
+def summary(rows: list[dict]) -> str:
+    return "\n".join(f"{r['label']:34s} {r['fps']:6.2f} fps  lag p50 {r['lag_p50_ms'] or 0:7.0f} ms  "
+                     f"p95 {r['lag_p95_ms'] or 0:7.0f} ms  text {r['text_mbps']:6.3f} Mbit/s  "
+                     f"frames {r['frame_mbps']:6.3f} Mbit/s" for r in rows)
