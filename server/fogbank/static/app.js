@@ -214,6 +214,10 @@ stream.addEventListener("error", (e) => {
     stream.send({ type: "params", params: {} });
   }
 });
+stream.addEventListener("link", (e) => {
+  const { type, ...link } = e.detail;
+  store.set({ link });
+});
 stream.addEventListener("frame", (e) => {
   store.update((s) => ({ lastFrame: e.detail, frames: s.frames + 1 }));
 });
@@ -545,12 +549,21 @@ function debounce(fn, ms) {
   let timer = 0;
   return () => { clearTimeout(timer); timer = setTimeout(fn, ms); };
 }
+// "JPEG q62 · 1.2 of 4.8 Mbit/s · 41 ms": the last frame's codec and quality, and the
+// stream's rate against the link's, with its round trip, as the server measures them
+function linkText(frame, link) {
+  const mbps = (bps) => (bps / 1e6).toFixed(bps < 1e7 ? 1 : 0);
+  const codec = `JPEG q${frame.quality}`;
+  if (!link) return codec;
+  return `${codec} · ${mbps(link.stream_bps)} of ${mbps(link.rate_bps)} Mbit/s · ${Math.round(link.rtt_ms)} ms`;
+}
 // the overlay: labelled, and blank while disconnected (no stale numbers)
 setInterval(() => {
   const live = stream.connected;
   $("stat-fps").textContent = live ? `${stream.fps().toFixed(1)} fps` : "–";
   $("stat-latency").textContent = live && stream.latency != null ? `${Math.round(stream.latency)} ms` : "–";
   $("stat-size").textContent = live && stream.lastFrame ? `${(stream.lastFrame.bytes / 1024).toFixed(0)} KB` : "–";
+  $("stat-link").textContent = live && stream.lastFrame ? linkText(stream.lastFrame, store.get().link) : "–";
   $("stat-refining").hidden = !(live && stream.lastFrame && !stream.lastFrame.full);
   $("stat-reduced").hidden = !(live && stream.lastFrame && stream.lastFrame.full && stream.lastFrame.reduced);
 }, 250);

@@ -44,6 +44,7 @@ export const store = createStore({
   showLayer: 0,         // the layer whose optical depth is shown
   viewStats: null,      // the numbers and legend of the last view that teaches
   probe: false,         // the plot panel follows the ray under the cursor
+  link: null,           // the server's last measure of the link: {rate_bps, rtt_ms, stream_bps}
   framing: null,        // the view's aspect (width / height) from the link opened, or null: the window's
 });
 

@@ -98,6 +98,10 @@ export class Stream extends EventTarget {
         this.sendTimes.splice(0, n).forEach((t, i) => this.versionTimes.set(msg.version - (n - 1 - i), t));
       }
       if (msg.type === "error" && this.sendTimes.length) this.sendTimes.shift();
+      if (msg.type === "ping") {   // at once: the server measures the link's round trip by it
+        this.send({ type: "pong", ping: msg.ping });
+        return;
+      }
       this.dispatchEvent(new CustomEvent(msg.type, { detail: msg }));
       return;
     }

@@ -12,8 +12,10 @@ Client -> server, one JSON object per text message, told apart by "type":
      "show": "shaded", "layer": 0}                        size, rate, and what the frames show
     {"type": "interact", "active": true}                   a drag started/ended
     {"type": "ack", "frame": 17}                           frames up to 17 arrived
+    {"type": "pong", "ping": 3}                            the answer to ping 3, at once
 
-Server -> client: text {"type": "hello" | "state" | "camera" | "error" | "view_stats", ...} and
+Server -> client: text {"type": "hello" | "state" | "camera" | "error" | "view_stats" | "ping"
+| "link", ...} and
 binary frames (a view that teaches, render/teach.py, sends its numbers and legend as
 "view_stats" just before its frame):
 HEADER (little-endian, 36 bytes) followed by the JPEG.
@@ -22,6 +24,10 @@ HEADER (little-endian, 36 bytes) followed by the JPEG.
      "speed": 1.0, "time": 3.2, "view": {...}, "answers": 2}        the whole look
     {"type": "camera", "version": 8, "camera": {...}, "query": "camera.yaw=12",
      "answers": 1}                                 a camera message's reply: the camera alone
+
+    {"type": "ping", "ping": 3}                    answer with a pong: the link's round trip
+    {"type": "link", "rate_bps": 4.8e6, "rtt_ms": 41, "stream_bps": 1.2e6}
+                                                   the link as the server measures it (stream/link.py)
 
 A reply to look changes waits while MAX_IN_FLIGHT frames are unacknowledged; the changes
 made meanwhile collapse into one reply, which `answers` of them (query, params, camera,
@@ -107,10 +113,15 @@ class AckMsg(_Msg):
     frame: int = Field(ge=0, le=2**32 - 1)
 
 
+class PongMsg(_Msg):
+    type: Literal["pong"]
+    ping: int = Field(ge=0, le=2**32 - 1)
+
+
 Message = Annotated[Union[QueryMsg, ParamsMsg, CameraMsg, PlayMsg, SpeedMsg, SeekMsg, ViewMsg,
-                          InteractMsg, AckMsg], Field(discriminator="type")]
+                          InteractMsg, AckMsg, PongMsg], Field(discriminator="type")]
 _adapter: TypeAdapter = TypeAdapter(Message)
-TYPES = ["query", "params", "camera", "play", "speed", "seek", "view", "interact", "ack"]
+TYPES = ["query", "params", "camera", "play", "speed", "seek", "view", "interact", "ack", "pong"]
 
 
 class ProtocolError(ValueError):

@@ -18,7 +18,8 @@ from fogbank.kinds.packing import split_by_time, variant
 from fogbank.model import errors
 from fogbank.model import presets as P
 from fogbank.model.params import FogParams, StillParams
-from fogbank.stream.protocol import (AckMsg, CameraMsg, InteractMsg, ParamsMsg, PlayMsg, QueryMsg, SeekMsg,
+from fogbank.stream.link import FrameFit, Link
+from fogbank.stream.protocol import (AckMsg, CameraMsg, InteractMsg, ParamsMsg, PlayMsg, PongMsg, QueryMsg, SeekMsg,
                        SpeedMsg, ViewMsg)
 from fogbank.model.urlstate import URLError, decode_lenient, encode, encode_field, view_state, view_suffix
 
@@ -174,6 +175,8 @@ class Session:
         self.acked = 0            # highest frame id acknowledged
         self.making = 0           # frames started but not yet sent
         self.sent = 0             # id of the last frame sent
+        self.link = Link()        # the viewer's link, from its acks (stream/link.py)
+        self.fit = FrameFit()     # the quality and size of frame it carries
         self.last_start = -math.inf
         self.not_before = -math.inf   # no frame before this (redo's `after`)
         self.last_input = -math.inf
@@ -334,6 +337,10 @@ class Session:
         if isinstance(msg, AckMsg):
             if msg.frame <= self.sent:
                 self.acked = max(self.acked, msg.frame)
+                self.link.acked(msg.frame, now)
+            return []
+        if isinstance(msg, PongMsg):
+            self.link.pong(msg.ping, now)
             return []
         return [{"type": "error", "msg": f"unhandled message {type(msg).__name__}"}]
 
@@ -594,6 +601,16 @@ class Session:
             still, msaa = self._refinement(fog, now, share)
             reduced = self.refine_level > 0
             estimate_ms = self._estimate_ms(still, msaa=msaa, full=True)
+        # the frame that fits the viewer's link (stream/link.py): quality first, then, while
+        # time runs, size; a paused look's final frame is always the look's own
+        quality = min(v.quality, PREVIEW_QUALITY) if preview else v.quality
+        if preview or self.playing:
+            if not preview:
+                k = self.fit.scale(self.link, quality, still.width * still.height, now)
+                if k < 1.0:
+                    still = still.model_copy(update={"width": max(16, 2 * round(still.width * k / 2)),
+                                                     "height": max(16, 2 * round(still.height * k / 2))})
+            quality = self.fit.quality(self.link, quality, still.width * still.height)
         hold = not preview and self._holds_fog(still)
         cached = self._scene_cached(still, not preview and msaa, preview)
         self._drew(still, not preview and msaa, hold, preview)
@@ -606,7 +623,7 @@ class Session:
         if preview:
             self._climb = False
         return FrameJob(self.frame, self.version, still, msaa=not preview and msaa,
-                        quality=min(v.quality, PREVIEW_QUALITY) if preview else v.quality,
+                        quality=quality,
                         full=not preview, playing=self.playing, show=self.showing(), layer=v.layer,
                         scale=self.preview_scale if preview else 1.0,
                         rung=self.preview_rung if preview else 0,

@@ -39,7 +39,9 @@ from fogbank.service import metrics
 
 from fogbank.workers import worker
 from fogbank.stream.protocol import (FLAG_FULL, FLAG_PLAYING, FLAG_REDUCED, MAX_MESSAGE, PROTOCOL, CameraMsg,
-                                     ParamsMsg, ProtocolError, QueryMsg, SeekMsg, frame_header, parse)
+                                     HEADER, ParamsMsg, ProtocolError, QueryMsg, SeekMsg, frame_header,
+                                     parse)
+from fogbank.stream.link import PING_EVERY_S
 from fogbank.stream.session import MAX_IN_FLIGHT, PLAY_BUDGET_MS, REFINE_BUDGET_MS, FrameJob, Session
 from fogbank.workers.supervisor import DeadlineExceeded, Slot, Supervisor, WorkerError
 
@@ -50,6 +52,7 @@ log = logging.getLogger("fogbank.stream")
 # change the look, each counted in the reply's "answers"
 OWED = ("state", "camera")
 LOOK_CHANGES = (QueryMsg, ParamsMsg, CameraMsg, SeekMsg)
+LINK_EVERY_S = 1.0   # the link's estimate is sent at most this often (a "link" message)
 IDLE_CLOSE = 4408   # closed for inactivity (no messages, or frames left unacknowledged)
 SHARE_RECENT_S = 1.0   # a playing session that started a frame this recently shares its worker (Streamer.sharing)
 QUEUE_MAX_MS = 60.0   # a frame costlier than this is never queued behind another (Streamer.queue_room)
@@ -110,6 +113,7 @@ class Client:
         # covers a camera), and how many look changes it answers. Replies go out only while
         # the flow-control window has room (or just before a frame), so text never queues
         # behind a slow link, and changes made meanwhile collapse into one reply.
+        self.link_told = -1e9   # when the page was last told the link's estimate
         self.owed: str | None = None
         self.owed_answers = 0
 
@@ -127,6 +131,9 @@ class Client:
         msg["answers"] = self.owed_answers
         self.owed, self.owed_answers = None, 0
         await self.send_json(msg)
+
+    async def ping(self, now: float) -> None:
+        await self.send_json({"type": "ping", "ping": self.session.link.ping(now)})
 
     async def send_json(self, msg: dict[str, Any]) -> None:
         # ASCII JSON: user text echoed in an error (a field name, a value) may hold lone
@@ -378,8 +385,21 @@ class Streamer:
             # a newer frame already went out (frames finish out of order when sizes or
             # encodes differ): this one is stale, drop it rather than show the past
             if not client.closed and job.frame > s.sent:
+                idle = s.sent == s.acked   # no frame on the link
                 s.sent = job.frame
-                await client.pay(self.clock(), force=True)   # the look's reply before its frame
+                now = self.clock()
+                await client.pay(now, force=True)   # the look's reply before its frame
+                if idle and now - s.link.last_ping >= PING_EVERY_S:
+                    await client.ping(now)   # a clean round trip (stream/link.py)
+                if now - client.link_told >= LINK_EVERY_S and s.link.rate_bps() is not None:
+                    client.link_told = now   # what the link carries, for the page's overlay
+                    await client.send_json({"type": "link", "rate_bps": round(s.link.rate_bps()),
+                                            "rtt_ms": round((s.link.rtt_s() or 0.0) * 1000, 1),
+                                            "stream_bps": round(s.link.stream_bps(now))})
+                # frames come every 1/fps of the view, or every render where that is longer
+                s.link.sent(job.frame, HEADER.size + len(out["data"]), now,
+                            max(1.0 / s.view.fps, (render_ms + encode_ms) / 1000.0))
+                s.fit.encoded(len(out["data"]), job.still.width * job.still.height, job.quality)
                 if out.get("stats"):   # a view that teaches: its numbers and legend first
                     await client.send_json({"type": "view_stats", "frame": job.frame, **out["stats"]})
                 await client.send_bytes(header + out["data"])

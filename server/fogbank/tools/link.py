@@ -62,6 +62,8 @@ async def orbit(url: str, query: str, seconds: float, size=(640, 360), hz: float
                     if orbiting:
                         texts.append((now, len(m.encode())))
                     msg = json.loads(m)
+                    if msg.get("type") == "ping":   # as the page does: at once
+                        await ws.send(json.dumps({"type": "pong", "ping": msg["ping"]}))
                     if msg.get("type") == "error":
                         errors.append(msg.get("msg", ""))
 
@@ -98,6 +100,55 @@ async def orbit(url: str, query: str, seconds: float, size=(640, 360), hz: float
             "frame_mbps": round(sum(in_span) * 8 / span / 1e6, 3),
             "texts": len(texts), "frames": len(in_span), "messages": i,
             "renderer": hello.get("renderer"), "errors": errors[:3], "started": t_start}
+
+
+async def watch(url: str, query: str, seconds: float, size=(1280, 720), settle_s: float = 3.0) -> dict:
+    """Open /ws?query at `size` with time running and watch for `seconds` after `settle_s`:
+    every frame acked as it arrives. Returns frames a second, Mbit/s of frames, and the
+    frames' median JPEG quality and width (the rate controller's choices), and the last
+    "link" estimate the server sent."""
+    ws_url = url.replace("http", "ws", 1) + "/ws?" + query
+    async with websockets.connect(ws_url, max_size=2**24) as ws:
+        await ws.recv(), await ws.recv()
+        await ws.send(json.dumps({"type": "view", "width": size[0], "height": size[1], "fps": 30}))
+        frames: list[tuple[float, int, int, int]] = []   # (arrival, bytes, quality, width)
+        link: dict = {}
+        t0 = time.monotonic() + settle_s
+        t1 = t0 + seconds
+        while time.monotonic() < t1:
+            try:
+                m = await asyncio.wait_for(ws.recv(), max(0.05, t1 - time.monotonic()))
+            except asyncio.TimeoutError:
+                break
+            now = time.monotonic()
+            if isinstance(m, bytes):
+                frame = struct.unpack_from("<I", m, 4)[0]
+                width, _, quality = struct.unpack_from("<HHB", m, 28)
+                await ws.send(json.dumps({"type": "ack", "frame": frame}))
+                if now >= t0:
+                    frames.append((now, len(m), quality, width))
+            else:
+                msg = json.loads(m)
+                if msg.get("type") == "ping":   # as the page does: at once
+                    await ws.send(json.dumps({"type": "pong", "ping": msg["ping"]}))
+                if msg.get("type") == "link":
+                    link = msg
+    span = seconds
+    q = sorted(f[2] for f in frames)
+    w = sorted(f[3] for f in frames)
+    return {"fps": round(len(frames) / span, 2), "frame_mbps": round(sum(f[1] for f in frames) * 8 / span / 1e6, 3),
+            "kb": round(sum(f[1] for f in frames) / max(1, len(frames)) / 1024, 1),
+            "quality": q[len(q) // 2] if q else None, "width": w[len(w) // 2] if w else None, "link": link}
+
+
+def watch_through(server_url: str, query: str, rate_bps: float | None, rtt_ms: float, seconds: float,
+                  size=(1280, 720)) -> dict:
+    """`watch` through a Relay to the server at `server_url` (rate None and no delay: loopback)."""
+    if rate_bps is None and not rtt_ms:
+        return asyncio.run(watch(server_url, query, seconds, size))
+    port = int(server_url.rsplit(":", 1)[1])
+    with Relay(port, rate_bps, rtt_ms) as relay:
+        return asyncio.run(watch(relay.url, query, seconds, size))
 
 
 class _quiet:

@@ -1,0 +1,131 @@
+"""stream/link.py: the link's round trip, delivery rate and frame budget, read from acks
+that a hand-written link makes: a FIFO of `rate` bytes a second behind `rtt` seconds of
+delay, frames sent with at most two unacknowledged (as the stream sends them)."""
+
+from __future__ import annotations
+
+import pytest
+
+from fogbank.stream.link import HEADROOM, JPEG_SIZE, MIN_QUALITY, SCALES, FrameFit, Link, jpeg_size
+
+
+def run_link(rate: float, rtt: float, frame_bytes, seconds: float, render_s: float = 0.03,
+             link: Link | None = None):
+    """Frames of frame_bytes(link) bytes each, rendered in render_s, at most two in flight,
+    over a FIFO link; returns the Link fed with each send and ack, and (sent, acked) times."""
+    link = link or Link()
+    link.pong(link.ping(0.0), rtt)   # a ping as the session starts: the link idle
+    t, free, frame = 0.0, 0.0, 0
+    in_flight: list[tuple[int, float]] = []   # (frame, ack time)
+    times = []
+    while t < seconds:
+        if len(in_flight) >= 2:   # wait for the oldest ack
+            f, a = in_flight.pop(0)
+            t = max(t, a)
+            link.acked(f, a)
+            continue
+        t += render_s
+        # acks that came back while rendering
+        while in_flight and in_flight[0][1] <= t:
+            f, a = in_flight.pop(0)
+            link.acked(f, a)
+        frame += 1
+        n = int(frame_bytes(link))
+        link.sent(frame, n, t, max(1 / 30, render_s))
+        start = max(t + rtt / 2, free)        # it reaches the link after half the delay
+        free = start + n / rate
+        ack = free + rtt / 2                  # and its ack comes back after the other half
+        in_flight.append((frame, ack))
+        times.append((t, ack, n))
+    return link, times
+
+
+@pytest.mark.parametrize("rate_mbps, rtt_ms", [(5, 40), (2, 40), (1, 80)])
+def test_a_saturated_link_reads_its_rate_and_round_trip(rate_mbps, rtt_ms):
+    rate, rtt = rate_mbps * 1e6 / 8, rtt_ms / 1000
+    # frames of 20-40 KB: the link, not the renderer, limits them
+    link, _ = run_link(rate, rtt, lambda _l, k=iter(range(10**6)): 20000 + 20000 * ((next(k) * 7) % 5) / 4, 10.0,
+                       render_s=0.001)
+    assert link.rate_bps() == pytest.approx(rate * 8, rel=0.02)
+    assert link.rtt_s() == pytest.approx(rtt)
+
+
+@pytest.mark.parametrize("render_ms", [50, 120])
+def test_an_idle_link_between_frames_reads_the_link_not_the_stream(render_ms):
+    """Frames of 10 KB every render on 2 Mbit/s, 80 ms away: the link idles between them
+    (the stream sends under 2 Mbit/s), and the rate still reads the link's 2 Mbit/s."""
+    rate = 2e6 / 8
+    link, times = run_link(rate, 0.08, lambda _l: 10000, 8.0, render_s=render_ms / 1000)
+    stream = 8 * sum(n for *_, n in times) / times[-1][0]
+    assert stream < 0.7 * rate * 8
+    assert link.rate_bps() == pytest.approx(rate * 8, rel=0.02)
+
+
+@pytest.mark.parametrize("rate_mbps, rtt_ms, render_ms", [(1, 40, 50), (2, 40, 30), (1, 100, 50)])
+def test_the_budget_makes_frames_fit_the_interval(rate_mbps, rtt_ms, render_ms):
+    """Frames that ask 29 KB each (a 720p q80 frame) on a thin link: the budget falls until
+    a frame's transfer fits about an interval; frames that follow it then wait at most about
+    two frames past the round trip, and come as often as the window lets frames of that
+    size come (two a round trip, a render and a transfer). Before (no budget): 29 KB
+    frames, one a transfer, 232 ms at 1 Mbit/s."""
+    rate, rtt, render = rate_mbps * 1e6 / 8, rtt_ms / 1000, render_ms / 1000
+    link, times = run_link(rate, rtt, lambda l: min(29000, l.budget or 29000), 20.0, render_s=render)
+    assert link.budget is not None
+    interval = max(1 / 30, render)
+    assert link.budget == pytest.approx(HEADROOM * rate * interval, rel=0.05)
+    steady = [(s, a, n) for s, a, n in times if s > 10.0]
+    assert max(a - s for s, a, _ in steady) <= rtt + 2 * 1.3 * interval + 1e-9
+    fps = len(steady) / (steady[-1][0] - steady[0][0])
+    window_fps = 2 / (rtt + render + link.budget / rate)
+    assert fps >= 0.8 * min(1 / interval, window_fps)
+    assert fps >= 2.0 * rate / 29000                  # at least twice the frames of 29 KB ones'
+
+
+def test_a_long_round_trip_alone_costs_no_quality():
+    """A fast link 300 ms away: two frames a round trip is the window's limit, and smaller
+    frames would not come more often; the budget does not bind."""
+    link, _ = run_link(50e6 / 8, 0.3, lambda _l: 29000, 10.0, render_s=0.05)
+    assert link.budget > 29000
+
+
+def test_a_fast_link_sets_no_budget_that_binds():
+    link, _ = run_link(100e6 / 8, 0.001, lambda _l: 29000, 5.0, render_s=0.05)
+    assert link.budget > 10 * 29000
+
+
+def test_a_client_that_answers_no_pings_gets_no_budget():
+    link = Link()
+    for i in range(1, 20):
+        link.sent(i, 29000, i * 0.1, 0.05)
+        link.acked(i, i * 0.1 + 0.3)
+    assert (link.rtt_s(), link.rate_bps(), link.budget) == (None, None, None)
+
+
+class _Budget(Link):
+    budget = None   # set by the test
+
+
+def test_quality_falls_before_size_and_size_holds_a_while():
+    fit, link = FrameFit(), _Budget()
+    px = 1280 * 720
+    fit.encoded(29000, px, 80)                        # 29 KB at q80
+    assert fit.bpp80 == pytest.approx(29000 / px)
+    assert fit.quality(link, 80, px) == 80            # no budget: the view's quality
+    link.budget = 29000 * jpeg_size(60) / jpeg_size(80) + 1
+    assert fit.quality(link, 80, px) == 60            # the highest that fits
+    assert fit.scale(link, 80, px, now=10.0) == 1.0   # q60 fits: the size stays
+    link.budget = 29000 * jpeg_size(MIN_QUALITY) / jpeg_size(80) * 0.5   # even q35 is twice over
+    k = fit.scale(link, 80, px, now=10.5)
+    assert k == SCALES[2]                             # 0.5 of the side: a quarter of the bytes
+    assert fit.quality(link, 80, int(px * k * k)) >= MIN_QUALITY
+    link.budget = 29000 * 4                           # room again, but within SCALE_HOLD_S
+    assert fit.scale(link, 80, px, now=11.0) == SCALES[2]
+    assert fit.scale(link, 80, px, now=12.0) == 1.0
+
+
+def test_jpeg_size_table_is_monotonic_and_interpolates():
+    sizes = [s for _, s in JPEG_SIZE]
+    assert sizes == sorted(sizes)
+    assert jpeg_size(80) == 1.0
+    assert jpeg_size(75) == pytest.approx((0.867 + 1.0) / 2)
+    assert jpeg_size(5) == JPEG_SIZE[0][1] and jpeg_size(99) == JPEG_SIZE[-1][1]
