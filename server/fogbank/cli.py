@@ -154,6 +154,12 @@ def cmd_bench_stream(args) -> None:
             srv.stop()
 
 
+def cmd_bench_link(args) -> None:
+    """The stream through a thin link, this code and, with --before-tree, another's."""
+    from fogbank.tools.link import bench
+    bench(args.before_tree, args.seconds, args.out)
+
+
 def cmd_bench(args) -> None:
     from fogbank.tools.bench import run
     run(args.out, quick=args.quick, only_targets=args.targets_only, before=args.before,
@@ -213,6 +219,12 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--out", help="write the results as JSON here")
     p.add_argument("--churn", action="store_true", help="each client changes look and view size every second")
     p.set_defaults(fn=cmd_soak)
+    p = sub.add_parser("bench-link", help="the stream through a thin link (a loopback relay: 5, 2, 1 Mbit/s)")
+    p.add_argument("--before-tree", help="another checkout's server/ folder, run in turn with this code")
+    p.add_argument("--seconds", type=float, default=8.0)
+    p.add_argument("--out", default="docs/bench-link.md")
+    p.set_defaults(fn=cmd_bench_link)
+
     p = sub.add_parser("bench-stream", help="delivered fps and control latency over /ws")
     p.add_argument("--url", help="a running server (default: start one on a free port)")
     p.add_argument("--query", default="v=1", help="the look to stream")

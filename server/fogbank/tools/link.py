@@ -173,3 +173,63 @@ def summary(rows: list[dict]) -> str:
     return "\n".join(f"{r['label']:34s} {r['fps']:6.2f} fps  lag p50 {r['lag_p50_ms'] or 0:7.0f} ms  "
                      f"p95 {r['lag_p95_ms'] or 0:7.0f} ms  text {r['text_mbps']:6.3f} Mbit/s  "
                      f"frames {r['frame_mbps']:6.3f} Mbit/s" for r in rows)
+
+
+# (label, query maker, mode, rate bits/s or None, round trip ms): issue 34's links
+LINK_CASES = (
+    ("orbit default, loopback", "default", "orbit", None, 0),
+    ("orbit default, 5 Mbit/s 40 ms", "default", "orbit", 5e6, 40),
+    ("orbit default, 1 Mbit/s 40 ms", "default", "orbit", 1e6, 40),
+    ("orbit 16 layers, loopback", "16", "orbit", None, 0),
+    ("orbit 16 layers, 5 Mbit/s 40 ms", "16", "orbit", 5e6, 40),
+    ("orbit 16 layers, 1 Mbit/s 40 ms", "16", "orbit", 1e6, 40),
+    ("720p playing, loopback", "default", "watch", None, 0),
+    ("720p playing, 5 Mbit/s 40 ms", "default", "watch", 5e6, 40),
+    ("720p playing, 2 Mbit/s 40 ms", "default", "watch", 2e6, 40),
+    ("720p playing, 1 Mbit/s 40 ms", "default", "watch", 1e6, 40),
+)
+
+
+def bench(before_tree: str | None = None, seconds: float = 8.0, out: str | None = None) -> dict:
+    """Each of LINK_CASES against a server of this code and, with `before_tree` (another
+    checkout's `server` folder), one of that code, in turn, through the same relay and
+    client (this code's). Writes a markdown table to `out` if given; returns the rows."""
+    import os
+
+    from fogbank.tools.bench import _tree_env
+    from fogbank.tools.child import ChildServer
+    trees = [("now", None)] + ([("before", before_tree)] if before_tree else [])
+    q16 = sixteen_layer_query()
+    rows: dict[str, dict[str, dict]] = {}
+    for name, tree in trees:
+        srv = ChildServer(env=_tree_env(tree) if tree else {})
+        try:
+            for label, look, mode, rate, rtt in LINK_CASES:
+                query = q16 if look == "16" else "v=1"
+                if mode == "orbit":
+                    r = orbit_through(srv.url, query, rate, rtt, seconds, size=(1280, 720))
+                else:
+                    r = watch_through(srv.url, query, rate, rtt, seconds)
+                rows.setdefault(label, {})[name] = r
+                print(f"  {name:6s} {label:34s} {r['fps']:6.2f} fps", flush=True)
+        finally:
+            srv.stop()
+    if out:
+        lines = ["# fogbank benchmark: the stream through a thin link (issue 34)", "",
+                 f"`fogbank bench-link{' --before-tree ' + before_tree if before_tree else ''} "
+                 f"--seconds {seconds:g}` on {os.cpu_count()} cores. A client acks every frame and answers "
+                 "pings as the page does; the relay (tools/relay.py) delays each direction by half the round "
+                 "trip and paces the server's bytes. Orbit: a camera message every 1/60 s inside an "
+                 "interaction, the view 1280x720 (the previews' sizes are the ladder's); lag is the page's "
+                 "control-to-frame latency. Playing: the default look with time running at 1280x720.", "",
+                 "| case | code | fps | lag p50 / p95 ms | text Mbit/s | frames Mbit/s | frame KB, quality, width |",
+                 "|---|---|---|---|---|---|---|"]
+        for label, by in rows.items():
+            for name, r in by.items():
+                lag = (f"{r['lag_p50_ms']:.0f} / {r['lag_p95_ms']:.0f}" if r.get("lag_p95_ms") is not None else "-")
+                shape = (f"{r['kb']} KB, q{r['quality']}, {r['width']} px" if "kb" in r else "-")
+                lines.append(f"| {label} | {name} | {r['fps']:.1f} | {lag} | {r.get('text_mbps', '-')} | "
+                             f"{r['frame_mbps']} | {shape} |")
+        with open(out, "w") as fh:
+            fh.write("\n".join(lines) + "\n")
+    return rows
