@@ -117,6 +117,7 @@ class Relay:
         self._loop = asyncio.new_event_loop()
 
         async def main():
+            self._main = asyncio.current_task()
             self._server = await asyncio.start_server(self._handle, "127.0.0.1", self.port)
             self.port = self._server.sockets[0].getsockname()[1]
             self._ready.set()
@@ -124,6 +125,7 @@ class Relay:
                 await self._server.serve_forever()
         with contextlib.suppress(asyncio.CancelledError, RuntimeError):
             self._loop.run_until_complete(main())
+        self._loop.close()
 
     def start(self) -> "Relay":
         self._thread = threading.Thread(target=self._run, daemon=True, name="relay")
@@ -141,10 +143,10 @@ class Relay:
         async def close():
             for w in list(self._writers):   # each connection's pumps end on the closed sockets
                 w.transport.abort()
-            for _ in range(100):
-                if not self._writers:
-                    break
-                await asyncio.sleep(0.01)
+            tasks = [t for t in asyncio.all_tasks() if t not in (asyncio.current_task(), self._main)]
+            for t in tasks:
+                t.cancel()
+            await asyncio.gather(*tasks, return_exceptions=True)
             # closing the listener ends serve_forever, and with it the loop: last
             asyncio.get_running_loop().call_soon(self._server.close)
         if self._loop and self._server and self._loop.is_running():
