@@ -154,6 +154,12 @@ def cmd_bench_stream(args) -> None:
             srv.stop()
 
 
+def cmd_bench_codecs(args) -> None:
+    """Video codecs on fogbank's own frames (tools/codecs.py)."""
+    from fogbank.tools.codecs import run
+    run(args.frames, args.out)
+
+
 def cmd_bench_link(args) -> None:
     """The stream through a thin link, this code and, with --before-tree, another's."""
     from fogbank.tools.link import bench
@@ -224,6 +230,11 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--seconds", type=float, default=8.0)
     p.add_argument("--out", default="docs/bench-link.md")
     p.set_defaults(fn=cmd_bench_link)
+
+    p = sub.add_parser("bench-codecs", help="JPEG, VP8, VP9 and AV1 on fogbank's frames: bytes, ms, SSIM")
+    p.add_argument("--frames", type=int, default=60)
+    p.add_argument("--out", default="docs/bench-codecs.md")
+    p.set_defaults(fn=cmd_bench_codecs)
 
     p = sub.add_parser("bench-stream", help="delivered fps and control latency over /ws")
     p.add_argument("--url", help="a running server (default: start one on a free port)")

@@ -3,7 +3,7 @@
 // page's state is in one store (store.js): handlers read it with store.get() and write it
 // with store.set()/update(); the toolbar, the time slider and the canvas's data-* follow it.
 
-import { Stream } from "./stream.js";
+import { Stream, decodableCodecs } from "./stream.js";
 import { Controls, buildPatch } from "./controls.js";
 import { UndoStack } from "./undo.js";
 import { compactQuery, isLong, withCamera } from "./links.js";
@@ -549,13 +549,15 @@ function debounce(fn, ms) {
   let timer = 0;
   return () => { clearTimeout(timer); timer = setTimeout(fn, ms); };
 }
-// "JPEG q62 · 1.2 of 4.8 Mbit/s · 41 ms": the last frame's codec and quality, and the
+// "VP9 · 0.8 of 4.8 Mbit/s · 41 ms", "JPEG q62 · ...": the last frame's codec (and quality), and the
 // stream's rate against the link's, with its round trip, as the server measures them
 function linkText(frame, link) {
   const mbps = (bps) => (bps / 1e6).toFixed(bps < 1e7 ? 1 : 0);
-  const codec = `JPEG q${frame.quality}`;
+  const codec = frame.codec === "jpeg" ? `JPEG q${frame.quality}` : frame.codec === "vp09" ? "VP9" : "VP8";
   if (!link) return codec;
-  return `${codec} · ${mbps(link.stream_bps)} of ${mbps(link.rate_bps)} Mbit/s · ${Math.round(link.rtt_ms)} ms`;
+  // the rate reads the link only while the link limits the stream; else, at least that
+  const rate = link.limiting ? `of ${mbps(link.rate_bps)}` : `(link ≥ ${mbps(link.rate_bps)})`;
+  return `${codec} · ${mbps(link.stream_bps)} ${rate} Mbit/s · ${Math.round(link.rtt_ms)} ms`;
 }
 // the overlay: labelled, and blank while disconnected (no stale numbers)
 setInterval(() => {
@@ -575,3 +577,5 @@ if (innerWidth < 900) {   // phones and narrow windows start with the view, not 
 sendView();
 showViewSize();
 stream.connect();
+// video frames where WebCodecs decodes them (stream.js): asked for with the view
+decodableCodecs().then((codecs) => stream.setCodecs(codecs));

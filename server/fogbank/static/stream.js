@@ -18,8 +18,28 @@ export function parseHeader(buf) {
     renderMs: v.getFloat32(20, true), encodeMs: v.getFloat32(24, true),
     width: v.getUint16(28, true), height: v.getUint16(30, true), quality: v.getUint8(32),
     full: (v.getUint8(33) & 1) !== 0, playing: (v.getUint8(33) & 2) !== 0,
-    reduced: (v.getUint8(33) & 4) !== 0, fogScale: v.getUint8(34),
+    reduced: (v.getUint8(33) & 4) !== 0, key: (v.getUint8(33) & 8) !== 0, fogScale: v.getUint8(34),
+    codec: CODEC_NAMES[v.getUint8(35)] || "jpeg",
   };
+}
+
+// The header's codec byte (server/fogbank/stream/protocol.py CODEC_IDS), and the WebCodecs
+// codec string of each video codec (VP9 profile 0, level 4.1, 8 bits)
+const CODEC_NAMES = ["jpeg", "vp8", "vp09"];
+const CODEC_STRINGS = { vp09: "vp09.00.41.08", vp8: "vp8" };
+
+// What this browser decodes, most wanted first, for the view message: the video codecs that
+// WebCodecs' VideoDecoder supports (only in a secure context: HTTPS or localhost), then JPEG
+export async function decodableCodecs() {
+  if (!window.isSecureContext || typeof VideoDecoder === "undefined") return ["jpeg"];
+  const out = [];
+  for (const [name, codec] of Object.entries(CODEC_STRINGS)) {
+    try {
+      const { supported } = await VideoDecoder.isConfigSupported({ codec, optimizeForLatency: true });
+      if (supported) out.push(name);
+    } catch { /* not this one */ }
+  }
+  return [...out, "jpeg"];
 }
 
 export class Stream extends EventTarget {
@@ -40,6 +60,17 @@ export class Stream extends EventTarget {
     this.received = 0;               // binary frames received, counted in arrival order
     this.drawn = 0;                  // the arrival number of the frame on the canvas
     this.decode = (blob) => createImageBitmap(blob);   // blob -> ImageBitmap (tests may swap it)
+    this.codecs = ["jpeg"];          // what the page decodes (decodableCodecs), sent with the view
+    this.decoder = null;             // the VideoDecoder of video frames, and its codec and size
+    this.decoderKey = "";
+    this.videoMeta = new Map();      // a video frame's header and arrival, by its timestamp (frame id)
+    this.videoError = null;          // why video stopped (the page then asks for JPEG)
+  }
+
+  // The codecs to ask for: sent with the view (at once, if it is known)
+  setCodecs(codecs) {
+    this.codecs = codecs;
+    if (this.view) this.send({ type: "view", ...this.view, codecs });
   }
 
   // A long look connects with its compact link (links.js): a 12k-character /ws request
@@ -57,7 +88,7 @@ export class Stream extends EventTarget {
     this.ws.onopen = () => {
       this.retry = 0;
       this.connected = true;
-      if (this.view) this.send({ type: "view", ...this.view });
+      if (this.view) this.send({ type: "view", ...this.view, codecs: this.codecs });
       this.dispatchEvent(new CustomEvent("open"));
     };
     this.ws.onmessage = (ev) => this.onMessage(ev);
@@ -85,7 +116,7 @@ export class Stream extends EventTarget {
 
   setView(view) {
     this.view = view;
-    this.send({ type: "view", ...view });
+    this.send({ type: "view", ...view, codecs: this.codecs });
   }
 
   async onMessage(ev) {
@@ -119,6 +150,10 @@ export class Stream extends EventTarget {
     }
     this.frameTimes.push(now);
     while (this.frameTimes.length && now - this.frameTimes[0] > 2000) this.frameTimes.shift();
+    if (header.codec !== "jpeg") {
+      this.decodeVideo(header, ev.data, seq, now);
+      return;
+    }
     const blob = new Blob([new Uint8Array(ev.data, HEADER_BYTES)], { type: "image/jpeg" });
     const bitmap = await this.decode(blob);
     if (seq < this.drawn) {   // a newer frame was decoded first and is on the canvas already
@@ -134,6 +169,59 @@ export class Stream extends EventTarget {
     bitmap.close();
     this.lastFrame = { ...header, bytes: ev.data.byteLength, at: now };
     this.dispatchEvent(new CustomEvent("frame", { detail: this.lastFrame }));
+  }
+
+  // A video frame (VP9 or VP8): decoded by WebCodecs in order, drawn when its picture comes
+  // out (decoderOutput). A keyframe (re)opens the decoder for its codec and size; a delta
+  // frame with no decoder open waits for the next keyframe (the server sends one for a new
+  // session, a new size and a dropped frame).
+  decodeVideo(header, buf, seq, now) {
+    const key = `${header.codec} ${header.width}x${header.height}`;
+    if (header.key && (!this.decoder || this.decoder.state === "closed" || this.decoderKey !== key)) {
+      if (this.decoder && this.decoder.state !== "closed") this.decoder.close();
+      this.decoder = new VideoDecoder({
+        output: (frame) => this.decoderOutput(frame),
+        error: (e) => this.videoFailed(e),
+      });
+      this.decoder.configure({ codec: CODEC_STRINGS[header.codec], codedWidth: header.width,
+        codedHeight: header.height, optimizeForLatency: true });
+      this.decoderKey = key;
+    }
+    if (!this.decoder || this.decoder.state !== "configured" || this.decoderKey !== key) return;
+    this.videoMeta.set(header.frame, { header, seq, bytes: buf.byteLength, at: now });
+    try {
+      this.decoder.decode(new EncodedVideoChunk({ type: header.key ? "key" : "delta", timestamp: header.frame,
+        data: new Uint8Array(buf, HEADER_BYTES) }));
+    } catch (e) {
+      this.videoFailed(e);
+    }
+  }
+
+  decoderOutput(frame) {
+    const meta = this.videoMeta.get(frame.timestamp);
+    for (const t of this.videoMeta.keys()) if (t <= frame.timestamp) this.videoMeta.delete(t);
+    if (!meta || meta.seq < this.drawn) {   // a newer frame is on the canvas already
+      frame.close();
+      return;
+    }
+    this.drawn = meta.seq;
+    if (this.canvas.width !== frame.displayWidth || this.canvas.height !== frame.displayHeight) {
+      this.canvas.width = frame.displayWidth;
+      this.canvas.height = frame.displayHeight;
+    }
+    this.ctx2d.drawImage(frame, 0, 0);
+    frame.close();
+    this.lastFrame = { ...meta.header, bytes: meta.bytes, at: meta.at };
+    this.dispatchEvent(new CustomEvent("frame", { detail: this.lastFrame }));
+  }
+
+  // After a decode error, JPEG from then on: the server is told with the view
+  videoFailed(e) {
+    this.videoError = String(e && e.message || e);
+    if (this.decoder && this.decoder.state !== "closed") this.decoder.close();
+    this.decoder = null;
+    this.setCodecs(["jpeg"]);
+    this.dispatchEvent(new CustomEvent("videoerror", { detail: this.videoError }));
   }
 
   // frames per second over the last two seconds (0 once frames stop coming)

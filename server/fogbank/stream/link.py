@@ -18,8 +18,9 @@ would shrink the frames for ever.
 
 The frame that fits: at most two frames are in flight (session.py MAX_IN_FLIGHT), so a
 frame whose transfer takes no longer than the frame interval keeps the frame rate, and at
-most two frames plus one round trip wait. A frame's byte budget is HEADROOM of what the
-link delivers in an interval. FrameFit meets it by lowering the JPEG quality first (down to
+most two frames plus one round trip wait. While the link limits the stream (frames spend
+over an interval on it: Link.limiting), a frame's byte budget is HEADROOM of what the link
+delivers in an interval. FrameFit meets it by lowering the JPEG quality first (down to
 MIN_QUALITY), then the size of frames drawn while time runs, by SCALES (changed at most
 once every SCALE_HOLD_S: a new size draws the scene pass again), and only then does the
 frame rate fall (the window does that by itself). The bytes a quality gives are predicted
@@ -38,6 +39,8 @@ PING_EVERY_S = 5.0      # a ping at most this often, when no frame is unacknowle
 RATE_WINDOW_S = 2.0     # the delivery rate is the median of this long's samples
 MIN_SAMPLES = 3         # ... once there are this many
 JITTER_S = 0.002        # a frame back within this of the round trip gives no rate sample
+LATE_FRAMES = 2         # frames in a row over an interval on the link: the link limits
+CALM_S = 5.0            # ... until none spent over half an interval on it for this long
 HEADROOM = 0.8          # a frame's budget: this share of what the link delivers in an interval
 MIN_QUALITY = 35        # JPEG quality is not lowered below this: below it, size goes first
 SCALES = (1.0, 0.75, 0.5, 0.375)   # side of a playing frame, of its view's
@@ -70,6 +73,8 @@ class Link:
         self.next_ping = 0
         self.last_ping = -math.inf
         self.interval = 1.0 / 30.0         # s between frames (the stream sets it as it sends)
+        self.late = 0                      # frames in a row over an interval on the link
+        self.limited_at: float | None = None   # when the link last showed that it limits
         self.sent_bytes: collections.deque = collections.deque()   # (sent at, bytes), 2 s
 
     def ping(self, now: float) -> int:
@@ -99,6 +104,12 @@ class Link:
                 busy = min(now - t - self.rtt, now - self.last_ack)
                 if busy > JITTER_S:
                     self.rates.append((now, n / busy))
+                on_link = now - t - self.rtt
+                self.late = self.late + 1 if on_link > self.interval else 0
+                if self.late >= LATE_FRAMES or (self.limited_at is not None and on_link > 0.5 * self.interval):
+                    self.limited_at = now
+                elif self.limited_at is not None and now - self.limited_at > CALM_S:
+                    self.limited_at = None
             self.last_ack = now
         while self.rates and now - self.rates[0][0] > RATE_WINDOW_S:
             self.rates.popleft()
@@ -113,10 +124,20 @@ class Link:
         return 8.0 * statistics.median(r for _, r in self.rates)
 
     @property
+    def limiting(self) -> bool:
+        """Whether the link limits the stream: LATE_FRAMES frames in a row spent over an
+        interval on it (their ack time less the round trip), and since then, within
+        CALM_S, one spent over half an interval. Only then does the rate read the link: a
+        stream of small frames that the link carries at once measures the server's and
+        the client's own delays (on loopback, 4 KB frames read 0.7 Mbit/s)."""
+        return self.limited_at is not None
+
+    @property
     def budget(self) -> float | None:
-        """A frame's bytes that the link carries in a frame interval, with HEADROOM."""
+        """A frame's bytes that the link carries in a frame interval, with HEADROOM, while
+        the link limits the stream (None: no limit)."""
         rate = self.rate_bps()
-        return None if rate is None else HEADROOM * rate / 8.0 * self.interval
+        return None if rate is None or not self.limiting else HEADROOM * rate / 8.0 * self.interval
 
     def stream_bps(self, now: float) -> float:
         """Bits a second sent over the last 2 s."""

@@ -9,7 +9,9 @@ Client -> server, one JSON object per text message, told apart by "type":
     {"type": "speed", "speed": 2.0}                        time speed (sim s per wall s)
     {"type": "seek", "time": 12.5}                         set the sim time
     {"type": "view", "width": 640, "height": 360, "fps": 30, "quality": 80,
-     "show": "shaded", "layer": 0}                        size, rate, and what the frames show
+     "show": "shaded", "layer": 0, "codecs": ["vp09", "jpeg"]}
+                                                           size, rate, what the frames show,
+                                                           and what the client decodes
     {"type": "interact", "active": true}                   a drag started/ended
     {"type": "ack", "frame": 17}                           frames up to 17 arrived
     {"type": "pong", "ping": 3}                            the answer to ping 3, at once
@@ -18,7 +20,8 @@ Server -> client: text {"type": "hello" | "state" | "camera" | "error" | "view_s
 | "link", ...} and
 binary frames (a view that teaches, render/teach.py, sends its numbers and legend as
 "view_stats" just before its frame):
-HEADER (little-endian, 36 bytes) followed by the JPEG.
+HEADER (little-endian, 36 bytes) followed by the JPEG, or a VP9 or VP8 packet (the
+header's codec byte; a keyframe has FLAG_KEY).
 
     {"type": "state", "version": 7, "query": "...", "params": {...}, "playing": true,
      "speed": 1.0, "time": 3.2, "view": {...}, "answers": 2}        the whole look
@@ -26,7 +29,7 @@ HEADER (little-endian, 36 bytes) followed by the JPEG.
      "answers": 1}                                 a camera message's reply: the camera alone
 
     {"type": "ping", "ping": 3}                    answer with a pong: the link's round trip
-    {"type": "link", "rate_bps": 4.8e6, "rtt_ms": 41, "stream_bps": 1.2e6}
+    {"type": "link", "rate_bps": 4.8e6, "rtt_ms": 41, "stream_bps": 1.2e6, "limiting": true}
                                                    the link as the server measures it (stream/link.py)
 
 A reply to look changes waits while MAX_IN_FLIGHT frames are unacknowledged; the changes
@@ -49,12 +52,17 @@ from fogbank.model.urlstate import MAX_QUERY
 PROTOCOL = 1
 MAX_MESSAGE = 64 * 1024
 # magic, frame id, params version, sim time (s), render ms, encode ms, width, height,
-# jpeg quality, flags (bit 0: full quality, bit 1: playing), fog scale, reserved
+# jpeg quality, flags (bit 0: full quality, bit 1: playing, bit 2: reduced, bit 3: a
+# keyframe), fog scale, codec (CODEC_IDS)
 HEADER = struct.Struct("<4sIIdffHHBBBB")
 MAGIC = b"FBK1"
 FLAG_FULL = 1
 FLAG_PLAYING = 2
 FLAG_REDUCED = 4   # a full (final) frame drawn below the look's quality: it costs past the budget
+FLAG_KEY = 8       # a video frame that is a keyframe (JPEG frames stand alone and carry no flag)
+# the codec of a frame's bytes: the header's last byte (render/video.py for the video codecs)
+CODEC_IDS = {"jpeg": 0, "vp8": 1, "vp09": 2}
+Codec = Literal["vp09", "vp8", "jpeg"]
 
 
 class _Msg(BaseModel):
@@ -101,6 +109,10 @@ class ViewMsg(_Msg):
     # what the frames show: the shaded look, or a view that teaches (render/teach.py)
     show: Literal["shaded", "transmittance", "optical_depth", "difference"] = "shaded"
     layer: Int = Field(0, ge=0, lt=MAX_LAYERS, description="the layer whose optical depth is shown")
+    # what the client decodes, most wanted first (the page asks WebCodecs' isConfigSupported);
+    # the server takes the first video codec here for frames drawn while time runs, and JPEG
+    # for the rest (previews, a paused look's final frame, views that teach)
+    codecs: list[Codec] = Field(default_factory=lambda: ["jpeg"], max_length=8)
 
 
 class InteractMsg(_Msg):
@@ -159,6 +171,7 @@ def parse(text: str | bytes) -> BaseModel:
 
 
 def frame_header(frame: int, version: int, sim_time: float, render_ms: float, encode_ms: float,
-                 width: int, height: int, quality: int, flags: int, fog_scale: int) -> bytes:
+                 width: int, height: int, quality: int, flags: int, fog_scale: int,
+                 codec: str = "jpeg") -> bytes:
     return HEADER.pack(MAGIC, frame, version, sim_time, render_ms, encode_ms, width, height,
-                       quality, flags, fog_scale, 0)
+                       quality, flags, fog_scale, CODEC_IDS[codec])

@@ -24,6 +24,22 @@ from fogbank.stream.protocol import (AckMsg, CameraMsg, InteractMsg, ParamsMsg, 
 from fogbank.model.urlstate import URLError, decode_lenient, encode, encode_field, view_state, view_suffix
 
 MAX_IN_FLIGHT = 2
+# a video stream's bits a second at 1280x720 (issue 34's target: the default look playing
+# at 30 fps in at most 1.5 Mbit/s at the SSIM of JPEG q80; VP9 reaches it at 1 Mbit/s),
+# in proportion to the pixels otherwise, within VIDEO_BPS_RANGE, and at most HEADROOM of
+# the link's measured rate
+VIDEO_BPS_720P = 1.2e6
+VIDEO_BPS_RANGE = (150e3, 6e6)
+
+
+def video_bitrate(pixels: int, link_bps: float | None) -> int:
+    """The bitrate of a video stream of `pixels` a frame on a link of `link_bps`."""
+    from fogbank.stream.link import HEADROOM
+    lo, hi = VIDEO_BPS_RANGE
+    bps = min(hi, max(lo, VIDEO_BPS_720P * pixels / (1280 * 720)))
+    if link_bps:
+        bps = max(lo, min(bps, HEADROOM * link_bps))
+    return int(bps)
 INPUT_SETTLE_S = 0.25     # after the last input, this long until the full-quality refinement
 VIEW_WAIT_S = 0.3         # a new session waits this long for its client's view size
 PREVIEW_QUALITY = 60      # JPEG quality while the user drags
@@ -157,6 +173,9 @@ class FrameJob:
     hold_fog: bool = False  # the worker keeps the fog's time-invariant part (Session._holds_fog)
     scene_cached: bool = False  # its estimate took the worker to hold its scene pass (Session._scene_cached)
     level: int = 0         # its quality: Session._refinement's level (a preview's rung's)
+    codec: str = "jpeg"    # or a video codec (render/video.py), with its bitrate and keyframe ask
+    bitrate: int = 0
+    keyframe: bool = False
 
 
 
@@ -176,6 +195,7 @@ class Session:
         self.making = 0           # frames started but not yet sent
         self.sent = 0             # id of the last frame sent
         self.link = Link()        # the viewer's link, from its acks (stream/link.py)
+        self.need_key = False     # the next video frame must be a keyframe (one was dropped)
         self.fit = FrameFit()     # the quality and size of frame it carries
         self.last_start = -math.inf
         self.not_before = -math.inf   # no frame before this (redo's `after`)
@@ -604,7 +624,15 @@ class Session:
         # the frame that fits the viewer's link (stream/link.py): quality first, then, while
         # time runs, size; a paused look's final frame is always the look's own
         quality = min(v.quality, PREVIEW_QUALITY) if preview else v.quality
-        if preview or self.playing:
+        # video for the frames drawn while time runs (the view's own size: a new size is a
+        # keyframe), JPEG for previews, a paused look's final frame and views that teach
+        codec = next((c for c in v.codecs if c != "jpeg"), "jpeg")
+        video = codec != "jpeg" and not preview and self.playing and self.showing() == "shaded"
+        bitrate = 0
+        if video:
+            bitrate = video_bitrate(still.width * still.height,
+                                    self.link.rate_bps() if self.link.limiting else None)
+        elif preview or self.playing:
             if not preview:
                 k = self.fit.scale(self.link, quality, still.width * still.height, now)
                 if k < 1.0:
@@ -622,8 +650,10 @@ class Session:
         self.refine_owed = False
         if preview:
             self._climb = False
+        need_key, self.need_key = self.need_key, self.need_key and not video
         return FrameJob(self.frame, self.version, still, msaa=not preview and msaa,
-                        quality=quality,
+                        quality=quality, codec=codec if video else "jpeg", bitrate=bitrate,
+                        keyframe=video and need_key,
                         full=not preview, playing=self.playing, show=self.showing(), layer=v.layer,
                         scale=self.preview_scale if preview else 1.0,
                         rung=self.preview_rung if preview else 0,

@@ -38,7 +38,7 @@ from fogbank.workers import cost
 from fogbank.service import metrics
 
 from fogbank.workers import worker
-from fogbank.stream.protocol import (FLAG_FULL, FLAG_PLAYING, FLAG_REDUCED, MAX_MESSAGE, PROTOCOL, CameraMsg,
+from fogbank.stream.protocol import (FLAG_FULL, FLAG_KEY, FLAG_PLAYING, FLAG_REDUCED, MAX_MESSAGE, PROTOCOL, CameraMsg,
                                      HEADER, ParamsMsg, ProtocolError, QueryMsg, SeekMsg, frame_header,
                                      parse)
 from fogbank.stream.link import PING_EVERY_S
@@ -361,6 +361,7 @@ class Streamer:
             try:
                 out = await self.workers.call(slot, worker.frame, job.still, s.id, job.msaa, job.quality,
                                               job.show, job.layer, job.hold_fog, not job.full,
+                                              job.codec, job.bitrate, job.keyframe,
                                               deadline=self.settings.frame_deadline_s)
                 if not out.get("pending"):
                     slot.drew(cost.program_key(job.still))
@@ -378,10 +379,10 @@ class Streamer:
             metrics.RENDER_MS.observe(render_ms)
             metrics.ENCODE_MS.observe(encode_ms)
             flags = ((FLAG_FULL if job.full else 0) | (FLAG_PLAYING if job.playing else 0)
-                     | (FLAG_REDUCED if job.reduced else 0))
+                     | (FLAG_REDUCED if job.reduced else 0) | (FLAG_KEY if out.get("key") else 0))
             header = frame_header(job.frame, job.version, job.still.time, render_ms, encode_ms,
                                   job.still.width, job.still.height, job.quality, flags,
-                                  job.still.effects.fog_scale)
+                                  job.still.effects.fog_scale, job.codec)
             # a newer frame already went out (frames finish out of order when sizes or
             # encodes differ): this one is stale, drop it rather than show the past
             if not client.closed and job.frame > s.sent:
@@ -395,11 +396,13 @@ class Streamer:
                     client.link_told = now   # what the link carries, for the page's overlay
                     await client.send_json({"type": "link", "rate_bps": round(s.link.rate_bps()),
                                             "rtt_ms": round((s.link.rtt_s() or 0.0) * 1000, 1),
-                                            "stream_bps": round(s.link.stream_bps(now))})
+                                            "stream_bps": round(s.link.stream_bps(now)),
+                                            "limiting": s.link.limiting})
                 # frames come every 1/fps of the view, or every render where that is longer
                 s.link.sent(job.frame, HEADER.size + len(out["data"]), now,
                             max(1.0 / s.view.fps, (render_ms + encode_ms) / 1000.0))
-                s.fit.encoded(len(out["data"]), job.still.width * job.still.height, job.quality)
+                if job.codec == "jpeg":   # the JPEG sizes that FrameFit predicts from
+                    s.fit.encoded(len(out["data"]), job.still.width * job.still.height, job.quality)
                 if out.get("stats"):   # a view that teaches: its numbers and legend first
                     await client.send_json({"type": "view_stats", "frame": job.frame, **out["stats"]})
                 await client.send_bytes(header + out["data"])
@@ -407,6 +410,8 @@ class Streamer:
                     client.unacked_since = self.clock()
                 sent = True
                 metrics.FRAMES.inc()
+            elif job.codec != "jpeg":   # a video frame dropped: the next one stands alone
+                s.need_key = True
         except DeadlineExceeded as exc:
             metrics.ERRORS.labels("frame_deadline").inc()
             deadline = self.settings.frame_deadline_s

@@ -102,7 +102,8 @@ async def orbit(url: str, query: str, seconds: float, size=(640, 360), hz: float
             "renderer": hello.get("renderer"), "errors": errors[:3], "started": t_start}
 
 
-async def watch(url: str, query: str, seconds: float, size=(1280, 720), settle_s: float = 3.0) -> dict:
+async def watch(url: str, query: str, seconds: float, size=(1280, 720), settle_s: float = 3.0,
+                codecs: tuple[str, ...] = ("jpeg",)) -> dict:
     """Open /ws?query at `size` with time running and watch for `seconds` after `settle_s`:
     every frame acked as it arrives. Returns frames a second, Mbit/s of frames, and the
     frames' median JPEG quality and width (the rate controller's choices), and the last
@@ -110,8 +111,10 @@ async def watch(url: str, query: str, seconds: float, size=(1280, 720), settle_s
     ws_url = url.replace("http", "ws", 1) + "/ws?" + query
     async with websockets.connect(ws_url, max_size=2**24) as ws:
         await ws.recv(), await ws.recv()
-        await ws.send(json.dumps({"type": "view", "width": size[0], "height": size[1], "fps": 30}))
+        await ws.send(json.dumps({"type": "view", "width": size[0], "height": size[1], "fps": 30,
+                                  "codecs": list(codecs)}))
         frames: list[tuple[float, int, int, int]] = []   # (arrival, bytes, quality, width)
+        encode_ms: list[float] = []
         link: dict = {}
         t0 = time.monotonic() + settle_s
         t1 = t0 + seconds
@@ -124,6 +127,7 @@ async def watch(url: str, query: str, seconds: float, size=(1280, 720), settle_s
             if isinstance(m, bytes):
                 frame = struct.unpack_from("<I", m, 4)[0]
                 width, _, quality = struct.unpack_from("<HHB", m, 28)
+                encode_ms.append(struct.unpack_from("<f", m, 24)[0])
                 await ws.send(json.dumps({"type": "ack", "frame": frame}))
                 if now >= t0:
                     frames.append((now, len(m), quality, width))
@@ -138,17 +142,18 @@ async def watch(url: str, query: str, seconds: float, size=(1280, 720), settle_s
     w = sorted(f[3] for f in frames)
     return {"fps": round(len(frames) / span, 2), "frame_mbps": round(sum(f[1] for f in frames) * 8 / span / 1e6, 3),
             "kb": round(sum(f[1] for f in frames) / max(1, len(frames)) / 1024, 1),
-            "quality": q[len(q) // 2] if q else None, "width": w[len(w) // 2] if w else None, "link": link}
+            "quality": q[len(q) // 2] if q else None, "width": w[len(w) // 2] if w else None, "link": link,
+            "encode_ms": round(sorted(encode_ms)[len(encode_ms) // 2], 1) if encode_ms else None}
 
 
 def watch_through(server_url: str, query: str, rate_bps: float | None, rtt_ms: float, seconds: float,
-                  size=(1280, 720)) -> dict:
+                  size=(1280, 720), codecs: tuple[str, ...] = ("jpeg",)) -> dict:
     """`watch` through a Relay to the server at `server_url` (rate None and no delay: loopback)."""
     if rate_bps is None and not rtt_ms:
-        return asyncio.run(watch(server_url, query, seconds, size))
+        return asyncio.run(watch(server_url, query, seconds, size, codecs=codecs))
     port = int(server_url.rsplit(":", 1)[1])
     with Relay(port, rate_bps, rtt_ms) as relay:
-        return asyncio.run(watch(relay.url, query, seconds, size))
+        return asyncio.run(watch(relay.url, query, seconds, size, codecs=codecs))
 
 
 class _quiet:

@@ -189,8 +189,12 @@ def probe() -> dict[str, Any]:
 
 
 def frame(still, slot: str, msaa: bool, quality: int, show: str = "shaded", layer: int = 0,
-          hold_fog: bool = False, draft: bool = False) -> dict[str, Any]:
-    """One stream frame as JPEG; `slot` names the session whose scene pass is cached, and
+          hold_fog: bool = False, draft: bool = False, codec: str = "jpeg", bitrate: int = 0,
+          keyframe: bool = False) -> dict[str, Any]:
+    """One stream frame as JPEG, or with `codec` "vp09" or "vp8" the session's next video
+    packet at `bitrate` bits a second (render/video.py: the worker keeps the session's
+    encoder; `keyframe` asks for a keyframe, and "key" says whether it is one); `slot`
+    names the session whose scene pass is cached, and
     `hold_fog` keeps its time-invariant fog with it (stream/session.py decides when);
     `draft`, a preview, may be lit by the preview shadow map (render/passes/shadow.py).
     `show` other than "shaded" draws a view that teaches instead (render/teach.py), and
@@ -216,8 +220,12 @@ def frame(still, slot: str, msaa: bool, quality: int, show: str = "shaded", laye
         else:
             img, stats = teach.render(r, still, show, layer, slot=slot)
         t1 = time.perf_counter()
-        data = encode(img, "jpg", quality)
-        return {"data": data, "render_ms": (t1 - t0) * 1000.0, "stats": stats,
+        key = False
+        if codec == "jpeg":
+            data = encode(img, "jpg", quality)
+        else:
+            data, key = _video().encode(slot, codec, img, bitrate, keyframe)
+        return {"data": data, "render_ms": (t1 - t0) * 1000.0, "stats": stats, "key": key,
                 "encode_ms": (time.perf_counter() - t1) * 1000.0,
                 # it compiled a program, baked a noise tile or drew the full shadow map for a
                 # sun new to the worker: work done once, not the look's cost (a dragged sun's
@@ -229,6 +237,18 @@ def frame(still, slot: str, msaa: bool, quality: int, show: str = "shaded", laye
                 # whether it warped an earlier preview's (render/reproject.py)
                 "scene_warped": warped}
     return _run(fn)
+
+
+_VIDEO = None
+
+
+def _video():
+    """This worker's video encoders, by session (render/video.py)."""
+    global _VIDEO
+    if _VIDEO is None:
+        from fogbank.render.video import VideoEncoders
+        _VIDEO = VideoEncoders()
+    return _VIDEO
 
 
 def still(still, fmt: str) -> dict[str, Any]:
@@ -277,6 +297,8 @@ def noop() -> dict[str, Any]:
 def drop_slot(slot: str) -> dict[str, Any]:
     def fn(r):
         r.drop_slot(slot)
+        if _VIDEO is not None:   # the session's video encoder goes with its scene pass
+            _VIDEO.drop(slot)
         return {}
     return _run(fn)
 
