@@ -240,3 +240,67 @@ def test_sessions_read_at_once_share_the_worker(client):
             t.join(30)
     assert min(counts) >= 5
     assert min(counts) >= max(counts) // 2
+
+
+def _decoded_video(frames, decoder):
+    """Decode the video frames (codec byte 2: VP9) in order; [(header, RGB array)]."""
+    import av
+    out = []
+    for h, data in frames:
+        if h[11] != 2:
+            continue
+        for d in decoder.decode(av.Packet(data)):
+            out.append((h, d.to_ndarray(format="rgb24")))
+    return out
+
+
+def test_video_frames_start_on_a_keyframe_and_a_new_size_gets_one(client):
+    """Issue 34: with VP9 among the codecs a client decodes, frames drawn while time runs
+    are VP9 packets; the first is a keyframe, as is the first at a new size, and every
+    packet decodes (PyAV's decoder, apart from the encoder) in order."""
+    import av
+    from fogbank.stream.protocol import CODEC_IDS, FLAG_KEY
+    with open_ws(client, "time=3") as ws:
+        ws.receive_json(), ws.receive_json()
+        ws.send_json({**VIEW, "width": 160, "height": 96, "codecs": ["vp09", "jpeg"]})
+        frames, _ = frames_and_texts(ws, 6)
+        video = [(h, d) for h, d in frames if h[11] == CODEC_IDS["vp09"]]
+        assert len(video) >= 4
+        assert video[0][0][9] & FLAG_KEY
+        assert not any(h[9] & FLAG_KEY for h, _ in video[1:] if (h[6], h[7]) == (160, 96))
+        decoded = _decoded_video(video, av.CodecContext.create("vp9", "r"))
+        assert len(decoded) == len(video)
+        assert decoded[-1][1].shape == (96, 160, 3)
+        ws.send_json({**VIEW, "width": 128, "height": 80, "codecs": ["vp09", "jpeg"]})
+        more, _ = frames_and_texts(ws, 8)
+        resized = [(h, d) for h, d in more if h[11] == CODEC_IDS["vp09"] and (h[6], h[7]) == (128, 80)]
+        assert resized and resized[0][0][9] & FLAG_KEY
+
+
+def test_video_frames_are_as_close_to_the_stills_as_jpeg_q80_in_fewer_bytes(client):
+    """The default look playing at 480x270: the VP9 frames' SSIM to the stills of their own
+    times (GET /api/still.png, the reference) is no worse than the JPEG q80 frames', in at
+    most a third of their bytes."""
+    import av
+    from fogbank.tools.codecs import ssim
+
+    def stream(codecs, n):
+        with open_ws(client, "time=3") as ws:
+            ws.receive_json(), ws.receive_json()
+            ws.send_json({**VIEW, "width": 480, "height": 270, "codecs": codecs})
+            frames, _ = frames_and_texts(ws, n)
+        return [(h, d) for h, d in frames if (h[6], h[7]) == (480, 270) and h[9] & 1]
+
+    def still(t):
+        r = client.get(f"/api/still.png?v=1&width=480&height=270&time={t!r}")
+        return np.asarray(Image.open(io.BytesIO(r.content)).convert("RGB"))
+
+    jpeg = stream(["jpeg"], 10)[-4:]
+    jpeg_ssim = [ssim(np.asarray(Image.open(io.BytesIO(d)).convert("RGB")), still(h[3])) for h, d in jpeg]
+    video = [(h, d) for h, d in stream(["vp09", "jpeg"], 14) if h[11] == 2]
+    decoded = _decoded_video(video, av.CodecContext.create("vp9", "r"))
+    assert len(decoded) >= 8
+    video_ssim = [ssim(img, still(h[3])) for h, img in decoded[-4:]]
+    assert np.mean(video_ssim) >= np.mean(jpeg_ssim)
+    # steady frames (the first is a keyframe): bytes a frame
+    assert np.mean([len(d) for _, d in video[-6:]]) <= np.mean([len(d) for _, d in jpeg]) / 3

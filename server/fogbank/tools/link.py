@@ -180,6 +180,51 @@ def summary(rows: list[dict]) -> str:
                      f"frames {r['frame_mbps']:6.3f} Mbit/s" for r in rows)
 
 
+async def frames_vs_stills(url: str, codec: str, seconds: float = 6.0, size=(1280, 720), samples: int = 6) -> dict:
+    """The default look playing at `size`, streamed as `codec` ("jpeg" or "vp09") for
+    `seconds`: its Mbit/s, and the mean SSIM (tools/codecs.py) of the last `samples` full
+    frames to the stills of their own times (GET /api/still.png)."""
+    import io
+    import urllib.request
+
+    import av
+    import numpy as np
+    from PIL import Image
+
+    from fogbank.tools.codecs import ssim
+    ws_url = url.replace("http", "ws", 1) + "/ws?v=1&time=3"
+    got = []   # (time, RGB array, bytes)
+    total, t0 = 0, None
+    dec = av.CodecContext.create("vp9", "r")
+    async with websockets.connect(ws_url, max_size=2**24) as ws:
+        await ws.recv(), await ws.recv()
+        await ws.send(json.dumps({"type": "view", "width": size[0], "height": size[1], "fps": 30,
+                                  "codecs": [codec, "jpeg"] if codec != "jpeg" else ["jpeg"]}))
+        while t0 is None or time.monotonic() - t0 < seconds:
+            m = await ws.recv()
+            if isinstance(m, str):
+                msg = json.loads(m)
+                if msg.get("type") == "ping":
+                    await ws.send(json.dumps({"type": "pong", "ping": msg["ping"]}))
+                continue
+            frame = struct.unpack_from("<I", m, 4)[0]
+            t = struct.unpack_from("<d", m, 12)[0]
+            await ws.send(json.dumps({"type": "ack", "frame": frame}))
+            t0 = t0 or time.monotonic()
+            total += len(m)
+            if m[35] == 2:
+                for d in dec.decode(av.Packet(m[36:])):
+                    got.append((t, d.to_ndarray(format="rgb24")))
+            elif m[33] & 1:
+                got.append((t, np.asarray(Image.open(io.BytesIO(m[36:])).convert("RGB"))))
+    scores = []
+    for t, img in got[-samples:]:
+        q = f"v=1&width={size[0]}&height={size[1]}&time={t!r}"
+        with urllib.request.urlopen(f"{url}/api/still.png?{q}") as r:
+            scores.append(ssim(img, np.asarray(Image.open(io.BytesIO(r.read())).convert("RGB"))))
+    return {"mbps": total * 8 / seconds / 1e6, "ssim": float(np.mean(scores)), "fps": len(got) / seconds}
+
+
 # (label, query maker, mode, rate bits/s or None, round trip ms): issue 34's links
 LINK_CASES = (
     ("orbit default, loopback", "default", "orbit", None, 0),
@@ -219,6 +264,16 @@ def bench(before_tree: str | None = None, seconds: float = 8.0, out: str | None 
                 print(f"  {name:6s} {label:34s} {r['fps']:6.2f} fps", flush=True)
         finally:
             srv.stop()
+    quality: dict[str, dict] = {}
+    srv = ChildServer()
+    try:   # this code only: the frames' fidelity, JPEG q80 and VP9, on loopback
+        for codec in ("jpeg", "vp09"):
+            quality[codec] = asyncio.run(frames_vs_stills(srv.url, codec, seconds))
+            print(f"  now    720p playing {codec:5s} {quality[codec]}", flush=True)
+        for label, rate in (("720p playing VP9, 5 Mbit/s 40 ms", 5e6), ("720p playing VP9, 1 Mbit/s 40 ms", 1e6)):
+            rows.setdefault(label, {})["now"] = watch_through(srv.url, "v=1", rate, 40, seconds, codecs=("vp09", "jpeg"))
+    finally:
+        srv.stop()
     if out:
         lines = ["# fogbank benchmark: the stream through a thin link (issue 34)", "",
                  f"`fogbank bench-link{' --before-tree ' + before_tree if before_tree else ''} "
@@ -235,6 +290,11 @@ def bench(before_tree: str | None = None, seconds: float = 8.0, out: str | None 
                 shape = (f"{r['kb']} KB, q{r['quality']}, {r['width']} px" if "kb" in r else "-")
                 lines.append(f"| {label} | {name} | {r['fps']:.1f} | {lag} | {r.get('text_mbps', '-')} | "
                              f"{r['frame_mbps']} | {shape} |")
+        lines += ["", "The default look playing at 1280x720 on loopback, this code: the stream's bits a second and "
+                  "the mean SSIM (luma, 7x7) of its last full frames to the stills of their own times.", "",
+                  "| frames | Mbit/s | fps | SSIM to the stills |", "|---|---|---|---|"]
+        lines += [f"| {'JPEG q80' if c == 'jpeg' else 'VP9'} | {q['mbps']:.2f} | {q['fps']:.1f} | {q['ssim']:.4f} |"
+                  for c, q in quality.items()]
         with open(out, "w") as fh:
             fh.write("\n".join(lines) + "\n")
     return rows
