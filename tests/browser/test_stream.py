@@ -86,3 +86,28 @@ def test_after_a_decode_error_the_page_falls_back_to_jpeg(server, browser):
     assert frame["codec"] == "jpeg"
     assert img.mean() > 20   # a picture, not a blank canvas
     page.context.close()
+
+
+def test_on_a_throttled_link_the_page_keeps_its_frames_and_names_the_link(server, browser):
+    """Chromium's own network emulation (CDP) at 1 Mbit/s and 40 ms: the page answers the
+    server's pings, the server finds the link limiting and sends VP9 at what it carries,
+    and frames keep coming; the overlay names the link. Before (issue 34): JPEG q80 at
+    29 KB a frame, 4 frames a second on such a link."""
+    page = new_page(browser, server.url + "/?v=1&time=3", w=1280, h=800)
+    cdp = page.context.new_cdp_session(page)
+    cdp.send("Network.enable")
+    cdp.send("Network.emulateNetworkConditions", {"offline": False, "latency": 40,
+                                                   "downloadThroughput": 1e6 / 8, "uploadThroughput": 1e6 / 8})
+    page.wait_for_function("window.fogbank && window.fogbank.store.get().link && "
+                           "window.fogbank.store.get().link.limiting", timeout=60000)
+    import time
+    time.sleep(4.0)
+    link = page.evaluate("window.fogbank.store.get().link")
+    frame = page.evaluate("window.fogbank.stream.lastFrame")
+    fps = page.evaluate("window.fogbank.stream.fps()")
+    assert frame["codec"] == "vp09"
+    assert 0.4e6 <= link["rate_bps"] <= 2.0e6
+    assert link["stream_bps"] <= 1.0e6
+    assert fps >= 8
+    assert "Mbit/s" in page.locator("#stat-link").inner_text()
+    page.context.close()

@@ -5,6 +5,7 @@ errors keep the session, oversized messages close it with 1009."""
 from __future__ import annotations
 
 import io
+import json
 import time
 
 import numpy as np
@@ -119,11 +120,21 @@ def test_acks_bound_frames_in_flight_and_latest_wins(client):
         for d in np.linspace(1.0, 4.0, 12):
             ws.send_json({"type": "params", "params": {"density": float(d)}})
             time.sleep(0.03)
-        time.sleep(1.0)
+        got, early = [], []
+        while len(got) < 2:   # two frames unacknowledged: the window is full
+            m = ws.receive()
+            if m.get("bytes"):
+                got.append(HEADER.unpack(m["bytes"][:36]))
+            elif json.loads(m["text"])["type"] == "state":
+                early.append(json.loads(m["text"]))
         ws.send_json({"type": "speed", "speed": 1.5})
-        # refused at once: a sentinel (the test client cannot time out), sent after the speed
-        ws.send_json({"type": "seek", "time": -1})
-        got, early = read_until_error(ws)
+        # refused at once: a sentinel (the test client cannot time out), sent after the
+        # speed; an error that answers no look change waits for nothing
+        ws.send_json({"type": "view", **{k: v for k, v in VIEW.items() if k != "type"},
+                      "show": "optical_depth", "layer": 9})
+        more_frames, more_early = read_until_error(ws)
+        got += more_frames
+        early += more_early
         assert len(got) == 2                          # never more than two unacknowledged
         # the replies owed meanwhile wait for room in the window: none answers the speed yet
         assert [s for s in early if s["speed"] == 1.5] == []

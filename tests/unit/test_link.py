@@ -72,7 +72,9 @@ def test_the_budget_makes_frames_fit_the_interval(rate_mbps, rtt_ms, render_ms):
     link, times = run_link(rate, rtt, lambda l: min(29000, l.budget or 29000), 20.0, render_s=render)
     assert link.budget is not None
     interval = max(1 / 30, render)
-    assert link.budget == pytest.approx(HEADROOM * rate * interval, rel=0.05)
+    # what the link carries in an interval, or (where the window, not the link, keeps the
+    # stream under half the link) up to half as much again, the budget probing upward
+    assert HEADROOM * rate * interval * 0.95 <= link.budget <= HEADROOM * rate * interval * 1.6
     steady = [(s, a, n) for s, a, n in times if s > 10.0]
     assert max(a - s for s, a, _ in steady) <= rtt + 2 * 1.3 * interval + 1e-9
     fps = len(steady) / (steady[-1][0] - steady[0][0])
@@ -95,16 +97,18 @@ def test_a_fast_link_sets_no_budget():
 
 def test_small_frames_with_slow_acks_set_no_budget():
     """4 KB frames on a fast link whose acks come 5-20 ms late (the server's and the
-    client's own delays): the rate reads low, but the link does not limit, so no budget
-    (before: the budget from that rate cut a loopback video stream to 0.56 Mbit/s)."""
+    client's own delays), three of them 80 ms late (a stalled page): the rate reads low,
+    but the link does not limit, so no budget (before: the budget from that rate cut a
+    loopback video stream to 0.56 Mbit/s; the review's stall latched it on)."""
     link = Link()
     link.pong(link.ping(0.0), 0.0005)
     for i in range(1, 200):
         t = i * 0.05
         link.sent(i, 4000, t, 0.05)
-        link.acked(i, t + 0.005 + 0.015 * ((i * 7) % 3) / 2)
+        link.acked(i, t + 0.005 + 0.015 * ((i * 7) % 3) / 2 + (0.08 if i in (50, 51, 52) else 0.0))
+        if i > 60:   # three acks 80 ms late (a stalled page) were soon forgotten
+            assert (link.limiting, link.budget) == (False, None)
     assert link.rate_bps() < 10e6
-    assert (link.limiting, link.budget) == (False, None)
 
 
 def test_a_client_that_answers_no_pings_gets_no_budget():
@@ -135,6 +139,11 @@ def test_quality_falls_before_size_and_size_holds_a_while():
     link.budget = 29000 * 4                           # room again, but within SCALE_HOLD_S
     assert fit.scale(link, 80, px, now=11.0) == SCALES[2]
     assert fit.scale(link, 80, px, now=12.0) == 1.0
+    link.budget = 29000 * jpeg_size(MIN_QUALITY) / jpeg_size(80) * 0.2
+    assert fit.scale(link, 80, px, now=13.5) == SCALES[3]
+    link.budget = None                                # the link no longer limits: a step a hold
+    assert [fit.scale(link, 80, px, now=t) for t in (14.0, 14.6, 15.2, 15.8, 16.4)] == \
+        [SCALES[3], SCALES[2], SCALES[2], SCALES[1], SCALES[1]]
 
 
 def test_jpeg_size_table_is_monotonic_and_interpolates():

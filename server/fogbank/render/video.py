@@ -8,12 +8,18 @@ libvpx's realtime mode at 1 Mbit/s gave 3.2 KB frames at SSIM 0.994 (JPEG q80: 2
 delay) 2.4 KB at only 0.991 in 6.7 ms. All three are BSD; x264, which PyAV's wheels also
 bundle, is GPL and is never used. VP8 is kept for browsers that decode no VP9.
 
-Each encoder runs with no lookahead (lag-in-frames 0): a frame in, its packet out. A new
-encoder, a new size or a new codec starts on a keyframe, and `keyframe` asks for one (a
-frame dropped after encoding, a viewer whose decoder failed)."""
+Each encoder runs with no lookahead (lag-in-frames 0): a frame in, its packet out, its
+time stamp the wall clock's (ms), so that libvpx's rate control spends the bitrate over
+the frames that really come, not 30 a second. A new encoder, a new size, a new codec or a
+new bitrate (libvpx ignores a bitrate changed in place) starts on a keyframe, and
+`keyframe` asks for one (a frame dropped after encoding). An encoder holds about 80 MB at
+1280x720 and 150 MB at 1920x1080 (libvpx's frame buffers), so a worker keeps them within
+a byte budget (VideoEncoders), and lets them all go when it passes its memory budget
+(workers/worker.py)."""
 
 from __future__ import annotations
 
+import time
 from fractions import Fraction
 
 import numpy as np
@@ -24,27 +30,33 @@ CODECS = {
                             "error-resilient": "0"}),
     "vp8": ("libvpx", {"deadline": "realtime", "cpu-used": "8", "lag-in-frames": "0"}),
 }
-BITRATE_CHANGE = 0.3   # a bitrate further than this share from the encoder's opens a new one
+BYTES_A_PIXEL = 90     # an encoder's memory, measured: about 78 MB at 1280x720 for VP9
+ENCODER_BYTES = 384 * 2**20   # a worker's encoders' memory, at most (about 4 at 720p)
 
 
 class VideoEncoder:
     """One session's video: `encode(rgb, keyframe, bitrate)` gives its next packet."""
 
-    def __init__(self, codec: str, width: int, height: int, bitrate: int, fps: int = 30):
+    def __init__(self, codec: str, width: int, height: int, bitrate: int, fps: int = 30, clock=time.monotonic):
         import av
         name, options = CODECS[codec]
         self.codec, self.width, self.height, self.bitrate = codec, width, height, bitrate
         self.ctx = av.CodecContext.create(name, "w")
         self.ctx.width, self.ctx.height, self.ctx.pix_fmt = width, height, "yuv420p"
-        self.ctx.time_base = Fraction(1, fps)
+        self.ctx.time_base = Fraction(1, 1000)   # ms of the wall clock
         self.ctx.framerate = Fraction(fps, 1)
         self.ctx.bit_rate = int(bitrate)
         self.ctx.options = dict(options)
-        self.pts = 0
+        self.clock = clock
+        self.start = clock()
+        self.pts = -1
+
+    @property
+    def nbytes(self) -> int:
+        return BYTES_A_PIXEL * self.width * self.height
 
     def fits(self, codec: str, width: int, height: int, bitrate: int) -> bool:
-        return ((codec, width, height) == (self.codec, self.width, self.height)
-                and abs(bitrate - self.bitrate) <= BITRATE_CHANGE * self.bitrate)
+        return (codec, width, height, bitrate) == (self.codec, self.width, self.height, self.bitrate)
 
     def encode(self, img: np.ndarray, keyframe: bool = False) -> tuple[bytes, bool]:
         """`img`: (height, width, 3 or 4) uint8 sRGB (a 4th channel is ignored); returns the
@@ -55,12 +67,14 @@ class VideoEncoder:
         # slicing it to RGB first took 8.7 ms more
         fmt = "rgba" if img.shape[2] == 4 else "rgb24"
         frame = av.VideoFrame.from_ndarray(np.ascontiguousarray(img), format=fmt).reformat(format="yuv420p")
+        self.pts = max(self.pts + 1, int((self.clock() - self.start) * 1000))
         frame.pts = self.pts
-        self.pts += 1
         if keyframe:
             frame.pict_type = PictureType.I
         packets = self.ctx.encode(frame)
         data = b"".join(bytes(p) for p in packets)
+        if not data:   # with no lookahead every frame gives a packet; a decoder cannot take none
+            raise RuntimeError(f"{self.codec} gave no packet for frame {self.pts}")
         return data, any(p.is_keyframe for p in packets)
 
 
@@ -68,20 +82,27 @@ class VideoEncoders:
     """The encoders of the sessions a worker draws, at most `limit` (the least recently
     used goes first: its session's next frame starts a new one, on a keyframe)."""
 
-    def __init__(self, limit: int = 16):
-        self.limit = limit
+    def __init__(self, limit: int = 16, limit_bytes: int = ENCODER_BYTES, clock=time.monotonic):
+        self.limit, self.limit_bytes, self.clock = limit, limit_bytes, clock
         self.by_slot: dict[str, VideoEncoder] = {}
 
     def encode(self, slot: str, codec: str, img: np.ndarray, bitrate: int, keyframe: bool) -> tuple[bytes, bool]:
         h, w = img.shape[:2]
         enc = self.by_slot.pop(slot, None)
         if enc is None or not enc.fits(codec, w, h, bitrate):
-            enc = VideoEncoder(codec, w, h, bitrate)
+            enc = VideoEncoder(codec, w, h, bitrate, clock=self.clock)
             keyframe = True
         self.by_slot[slot] = enc   # most recent last
-        while len(self.by_slot) > self.limit:
+        while len(self.by_slot) > 1 and (len(self.by_slot) > self.limit or self.nbytes > self.limit_bytes):
             self.by_slot.pop(next(iter(self.by_slot)))
         return enc.encode(img, keyframe)
 
+    @property
+    def nbytes(self) -> int:
+        return sum(e.nbytes for e in self.by_slot.values())
+
     def drop(self, slot: str) -> None:
         self.by_slot.pop(slot, None)
+
+    def clear(self) -> None:
+        self.by_slot.clear()

@@ -125,10 +125,10 @@ export class Stream extends EventTarget {
       if (msg.type === "state" || msg.type === "camera") {
         // a reply answers `answers` look changes (several collapse into one reply while
         // frames are in flight), each of which made one version, the last this one
-        const n = Math.min(msg.answers ?? 1, this.sendTimes.length);
+        const n = Math.min(msg.answers ?? 0, this.sendTimes.length);
         this.sendTimes.splice(0, n).forEach((t, i) => this.versionTimes.set(msg.version - (n - 1 - i), t));
       }
-      if (msg.type === "error" && this.sendTimes.length) this.sendTimes.shift();
+      if (msg.type === "error") this.sendTimes.splice(0, msg.answers ?? 0);   // a refused look change
       if (msg.type === "ping") {   // at once: the server measures the link's round trip by it
         this.send({ type: "pong", ping: msg.ping });
         return;
@@ -183,8 +183,13 @@ export class Stream extends EventTarget {
         output: (frame) => this.decoderOutput(frame),
         error: (e) => this.videoFailed(e),
       });
-      this.decoder.configure({ codec: CODEC_STRINGS[header.codec], codedWidth: header.width,
-        codedHeight: header.height, optimizeForLatency: true });
+      try {
+        this.decoder.configure({ codec: CODEC_STRINGS[header.codec], codedWidth: header.width,
+          codedHeight: header.height, optimizeForLatency: true });
+      } catch (e) {
+        this.videoFailed(e);
+        return;
+      }
       this.decoderKey = key;
     }
     if (!this.decoder || this.decoder.state !== "configured" || this.decoderKey !== key) return;

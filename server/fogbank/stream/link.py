@@ -39,8 +39,10 @@ PING_EVERY_S = 5.0      # a ping at most this often, when no frame is unacknowle
 RATE_WINDOW_S = 2.0     # the delivery rate is the median of this long's samples
 MIN_SAMPLES = 3         # ... once there are this many
 JITTER_S = 0.002        # a frame back within this of the round trip gives no rate sample
-LATE_FRAMES = 2         # frames in a row over an interval on the link: the link limits
-CALM_S = 5.0            # ... until none spent over half an interval on it for this long
+LATE_FRAMES = 3         # frames in a row over an interval on the link: the link limits
+CALM_S = 5.0            # ... until none spent over half an interval on it for this long,
+IDLE_SHARE = 0.5        # ... or the stream sends under this share of what the link delivers
+GROW = 1.05             # after, the budget grows by this a frame
 HEADROOM = 0.8          # a frame's budget: this share of what the link delivers in an interval
 MIN_QUALITY = 35        # JPEG quality is not lowered below this: below it, size goes first
 SCALES = (1.0, 0.75, 0.5, 0.375)   # side of a playing frame, of its view's
@@ -75,11 +77,15 @@ class Link:
         self.interval = 1.0 / 30.0         # s between frames (the stream sets it as it sends)
         self.late = 0                      # frames in a row over an interval on the link
         self.limited_at: float | None = None   # when the link last showed that it limits
+        self.cap: float | None = None      # a frame's bytes (budget)
         self.sent_bytes: collections.deque = collections.deque()   # (sent at, bytes), 2 s
 
     def ping(self, now: float) -> int:
-        """A ping goes out now; returns its id."""
+        """A ping goes out now; returns its id (the last 8 are awaited: a client that
+        answers none keeps no more)."""
         self.pings[self.next_ping] = now
+        while len(self.pings) > 8:
+            self.pings.pop(next(iter(self.pings)))
         self.next_ping += 1
         self.last_ping = now
         return self.next_ping - 1
@@ -108,8 +114,9 @@ class Link:
                 self.late = self.late + 1 if on_link > self.interval else 0
                 if self.late >= LATE_FRAMES or (self.limited_at is not None and on_link > 0.5 * self.interval):
                     self.limited_at = now
-                elif self.limited_at is not None and now - self.limited_at > CALM_S:
+                if self.limited_at is not None and (now - self.limited_at > CALM_S or self._idle(now)):
                     self.limited_at = None
+            self._budget(n)
             self.last_ack = now
         while self.rates and now - self.rates[0][0] > RATE_WINDOW_S:
             self.rates.popleft()
@@ -123,21 +130,40 @@ class Link:
             return None
         return 8.0 * statistics.median(r for _, r in self.rates)
 
+    def _idle(self, now: float) -> bool:
+        """Whether the stream sends under IDLE_SHARE of what the link delivers: a link
+        that limits is busy with it. Acks late by the server's or the client's own delays
+        (a busy page, a stalled event loop) read as time on the link, but not as a link
+        kept busy: 4 KB frames 20 ms late read 1.6 Mbit/s of which the stream sends 0.6."""
+        rate = self.rate_bps()
+        return rate is not None and len(self.sent_bytes) >= 4 and self.stream_bps(now) < IDLE_SHARE * rate
+
     @property
     def limiting(self) -> bool:
         """Whether the link limits the stream: LATE_FRAMES frames in a row spent over an
         interval on it (their ack time less the round trip), and since then, within
-        CALM_S, one spent over half an interval. Only then does the rate read the link: a
-        stream of small frames that the link carries at once measures the server's and
-        the client's own delays (on loopback, 4 KB frames read 0.7 Mbit/s)."""
+        CALM_S, one spent over half an interval, the stream keeping the link busy (_idle).
+        Only then does the rate read the link: a stream of small frames that the link
+        carries at once measures the server's and the client's own delays (on loopback,
+        4 KB frames read 0.7 Mbit/s)."""
         return self.limited_at is not None
 
     @property
     def budget(self) -> float | None:
-        """A frame's bytes that the link carries in a frame interval, with HEADROOM, while
-        the link limits the stream (None: no limit)."""
+        """A frame's bytes: while the link limits the stream, what it carries in a frame
+        interval, with HEADROOM; after, that budget growing by GROW a frame until it is
+        twice the frames' (None: no limit). A link that limits again stops the growth, so
+        the frames climb back, not jump back, to the size that filled it."""
+        return self.cap
+
+    def _budget(self, n: int) -> None:
         rate = self.rate_bps()
-        return None if rate is None or not self.limiting else HEADROOM * rate / 8.0 * self.interval
+        if self.limiting and rate is not None:
+            self.cap = HEADROOM * rate / 8.0 * self.interval
+        elif self.cap is not None:
+            self.cap *= GROW
+            if self.cap > 2 * max((b for _, b in self.sent_bytes), default=n):
+                self.cap = None
 
     def stream_bps(self, now: float) -> float:
         """Bits a second sent over the last 2 s."""
@@ -172,9 +198,14 @@ class FrameFit:
     def scale(self, link: Link, want: int, pixels: int, now: float) -> float:
         """The side, of its view's, of a frame drawn while time runs: the largest of
         SCALES whose frame fits at MIN_QUALITY, changed at most once every SCALE_HOLD_S,
-        and up only where the larger one would fit with a quarter to spare."""
+        and up only where the larger one would fit with a quarter to spare; with no
+        budget (the link no longer limits), a step up every SCALE_HOLD_S."""
         budget = link.budget
-        if budget is None or self.bpp80 is None or now - self.scale_at < SCALE_HOLD_S:
+        if now - self.scale_at < SCALE_HOLD_S:
+            return SCALES[self.scale_i]
+        if budget is None or self.bpp80 is None:
+            if self.scale_i > 0:   # the link no longer limits: a step back up a hold
+                self.scale_i, self.scale_at = self.scale_i - 1, now
             return SCALES[self.scale_i]
         q = min(want, MIN_QUALITY)
         fits = [self.bpp80 * pixels * s * s * jpeg_size(q) <= budget for s in SCALES]

@@ -49,7 +49,9 @@ from fogbank.model.errors import clean, error, from_validation
 from fogbank.model.fields import MAX_LAYERS, Int
 from fogbank.model.urlstate import MAX_QUERY
 
-PROTOCOL = 1
+# 2: the camera reply, replies that wait in the window ("answers"), ping/pong and "link",
+# video frames (the header's codec byte, FLAG_KEY; the view's "codecs")
+PROTOCOL = 2
 MAX_MESSAGE = 64 * 1024
 # magic, frame id, params version, sim time (s), render ms, encode ms, width, height,
 # jpeg quality, flags (bit 0: full quality, bit 1: playing, bit 2: reduced, bit 3: a

@@ -41,7 +41,9 @@ def video_bitrate(pixels: int, link_bps: float | None) -> int:
     bps = min(hi, max(lo, VIDEO_BPS_720P * (pixels / (1280 * 720)) ** 0.75))
     if link_bps:
         bps = max(lo, min(bps, HEADROOM * link_bps))
-    return int(bps)
+    # in steps of half an octave: a new bitrate is a new encoder and a keyframe (libvpx
+    # ignores one changed in place), so a rate that wanders within a step changes nothing
+    return int(2 ** (math.floor(2 * math.log2(bps)) / 2))
 INPUT_SETTLE_S = 0.25     # after the last input, this long until the full-quality refinement
 VIEW_WAIT_S = 0.3         # a new session waits this long for its client's view size
 PREVIEW_QUALITY = 60      # JPEG quality while the user drags

@@ -52,6 +52,16 @@ log = logging.getLogger("fogbank.stream")
 # change the look, each counted in the reply's "answers"
 OWED = ("state", "camera")
 LOOK_CHANGES = (QueryMsg, ParamsMsg, CameraMsg, SeekMsg)
+LOOK_CHANGE_TYPES = {"query", "params", "camera", "seek"}
+
+
+def _type_of(data: str | bytes) -> Any:
+    """The "type" of a message that the protocol refused, if it has one."""
+    try:
+        msg = json.loads(data)
+    except (ValueError, RecursionError, UnicodeDecodeError):
+        return None
+    return msg.get("type") if isinstance(msg, dict) else None
 LINK_EVERY_S = 1.0   # the link's estimate is sent at most this often (a "link" message)
 IDLE_CLOSE = 4408   # closed for inactivity (no messages, or frames left unacknowledged)
 SHARE_RECENT_S = 1.0   # a playing session that started a frame this recently shares its worker (Streamer.sharing)
@@ -131,6 +141,13 @@ class Client:
         msg["answers"] = self.owed_answers
         self.owed, self.owed_answers = None, 0
         await self.send_json(msg)
+
+    async def answer_error(self, msg: dict[str, Any], answers: int, now: float) -> None:
+        """An error; one that answers a look change (`answers` 1) goes after the replies
+        owed to the changes before it, so that the client reads its answers in order."""
+        if answers:
+            await self.pay(now, force=True)
+        await self.send_json({**msg, "answers": answers})
 
     async def ping(self, now: float) -> None:
         await self.send_json({"type": "ping", "ping": self.session.link.ping(now)})
@@ -604,15 +621,15 @@ async def websocket_endpoint(ws: WebSocket, streamer: Streamer, renderer_info: d
             try:
                 parsed = parse(data)
             except ProtocolError as exc:
-                await client.send_json({"type": "error", "detail": exc.errors, "msg": str(exc)})
+                await client.answer_error({"type": "error", "detail": exc.errors, "msg": str(exc)},
+                                          int(_type_of(data) in LOOK_CHANGE_TYPES), streamer.clock())
                 continue
             acked = session.acked
             for out in session.apply(parsed, streamer.clock()):
                 if out["type"] in OWED:
                     client.owe(out["type"], int(isinstance(parsed, LOOK_CHANGES)))
-                else:   # an error: the replies before it first, in order
-                    await client.pay(streamer.clock(), force=True)
-                    await client.send_json(out)
+                else:
+                    await client.answer_error(out, int(isinstance(parsed, LOOK_CHANGES)), streamer.clock())
             await client.pay(streamer.clock())
             if session.acked != acked:   # progress: the oldest unacknowledged frame is newer
                 client.unacked_since = None if session.acked >= session.sent else streamer.clock()

@@ -111,8 +111,12 @@ async def watch(url: str, query: str, seconds: float, size=(1280, 720), settle_s
     ws_url = url.replace("http", "ws", 1) + "/ws?" + query
     async with websockets.connect(ws_url, max_size=2**24) as ws:
         await ws.recv(), await ws.recv()
-        await ws.send(json.dumps({"type": "view", "width": size[0], "height": size[1], "fps": 30,
-                                  "codecs": list(codecs)}))
+        # JPEG alone is the default, and said only otherwise: a server before video frames
+        # refuses a view that names codecs (and its frames would keep their first size)
+        view = {"type": "view", "width": size[0], "height": size[1], "fps": 30}
+        if tuple(codecs) != ("jpeg",):
+            view["codecs"] = list(codecs)
+        await ws.send(json.dumps(view))
         frames: list[tuple[float, int, int, int]] = []   # (arrival, bytes, quality, width)
         encode_ms: list[float] = []
         link: dict = {}

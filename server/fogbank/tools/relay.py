@@ -82,8 +82,7 @@ class _Pump:
 class Relay:
     """`Relay(target_port, rate_bps=5e6, rtt_ms=40).start()` listens on 127.0.0.1:`port`
     (a free one unless given) in a thread of its own and relays each connection to
-    127.0.0.1:`target_port`; `stop()` closes it. `sent_down` counts the bytes delivered to
-    clients."""
+    127.0.0.1:`target_port`; `stop()` closes it."""
 
     def __init__(self, target_port: int, rate_bps: float | None = None, rtt_ms: float = 0.0,
                  port: int = 0, queue_bytes: int | None = None):
@@ -110,6 +109,10 @@ class Relay:
         up = _Pump(c_reader, s_writer, half, None, self.queue_bytes)
         try:
             await asyncio.gather(down.read(), down.write(), up.read(), up.write())
+        except asyncio.CancelledError:
+            # stop() cancels the connection: end quietly (asyncio's streams read a cancelled
+            # handler's exception in a callback, which prints a traceback)
+            pass
         finally:
             self._writers -= {c_writer, s_writer}
 

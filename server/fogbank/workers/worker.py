@@ -159,6 +159,8 @@ def _run(fn) -> dict[str, Any]:
     budget = _config.get("memory_bytes", 0)
     if budget and out["rss"] > budget:
         _renderer.release_caches()
+        if _VIDEO is not None:   # the sessions' encoders too (their next frames are keyframes)
+            _VIDEO.clear()
         gc.collect()
         _trim_heap()
         out["rss"] = rss_bytes()
