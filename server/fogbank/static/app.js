@@ -564,7 +564,9 @@ setInterval(() => {
   const live = stream.connected;
   $("stat-fps").textContent = live ? `${stream.fps().toFixed(1)} fps` : "–";
   $("stat-latency").textContent = live && stream.latency != null ? `${Math.round(stream.latency)} ms` : "–";
-  $("stat-size").textContent = live && stream.lastFrame ? `${(stream.lastFrame.bytes / 1024).toFixed(0)} KB` : "–";
+  // (a video frame is often under a kilobyte: one decimal below 10 KB)
+  const kb = live && stream.lastFrame ? stream.lastFrame.bytes / 1024 : null;
+  $("stat-size").textContent = kb === null ? "–" : `${kb.toFixed(kb < 10 ? 1 : 0)} KB`;
   $("stat-link").textContent = live && stream.lastFrame ? linkText(stream.lastFrame, store.get().link) : "–";
   $("stat-refining").hidden = !(live && stream.lastFrame && !stream.lastFrame.full);
   $("stat-reduced").hidden = !(live && stream.lastFrame && stream.lastFrame.full && stream.lastFrame.reduced);
