@@ -78,10 +78,9 @@ def test_patches_apply_in_order(client):
         assert frames[-1][0][2] == versions[-1][0]   # frames reflect the last version
 
 
-def read_until_speed(ws, speed):
-    """Read until the state that answers a speed message arrives (a sentinel: the test
-    client has no receive timeout). Returns frame headers and states read meanwhile."""
-    import json
+def read_until(ws, last):
+    """Read until a text message for which last(message) holds (a sentinel: the test client
+    has no receive timeout). Returns frame headers and the states read, a last state with them."""
     frames, states = [], []
     while True:
         m = ws.receive()
@@ -91,24 +90,18 @@ def read_until_speed(ws, speed):
         t = json.loads(m["text"])
         if t["type"] == "state":
             states.append(t)
-            if t["speed"] == speed:
-                return frames, states
+        if last(t):
+            return frames, states
+
+
+def read_until_speed(ws, speed):
+    """Until the state that answers a speed message arrives."""
+    return read_until(ws, lambda t: t["type"] == "state" and t["speed"] == speed)
 
 
 def read_until_error(ws):
-    """Read until an error arrives; returns frame headers and states read meanwhile."""
-    import json
-    frames, states = [], []
-    while True:
-        m = ws.receive()
-        if m.get("bytes"):
-            frames.append(HEADER.unpack(m["bytes"][:36]))
-            continue
-        t = json.loads(m["text"])
-        if t["type"] == "error":
-            return frames, states
-        if t["type"] == "state":
-            states.append(t)
+    """Until an error arrives."""
+    return read_until(ws, lambda t: t["type"] == "error")
 
 
 def test_acks_bound_frames_in_flight_and_latest_wins(client):
@@ -300,17 +293,23 @@ def test_video_frames_are_as_close_to_the_stills_as_jpeg_q80_in_fewer_bytes(clie
             ws.receive_json(), ws.receive_json()
             ws.send_json({**VIEW, "width": 480, "height": 270, "codecs": codecs})
             frames, _ = frames_and_texts(ws, n)
-        return [(h, d) for h, d in frames if (h[6], h[7]) == (480, 270) and h[9] & 1]
+        return frames
+
+    def compared(h):
+        # a full frame at the look's own quality and the view's size (a loaded machine's
+        # refinement may reduce some, flag 4: the stream's choice, not the codec's)
+        return (h[6], h[7]) == (480, 270) and h[9] & 1 and not h[9] & 4
 
     def still(t):
         r = client.get(f"/api/still.png?v=1&width=480&height=270&time={t!r}")
         return np.asarray(Image.open(io.BytesIO(r.content)).convert("RGB"))
 
-    jpeg = stream(["jpeg"], 10)[-4:]
+    jpeg = [(h, d) for h, d in stream(["jpeg"], 12) if compared(h)][-4:]
+    assert len(jpeg) == 4
     jpeg_ssim = [ssim(np.asarray(Image.open(io.BytesIO(d)).convert("RGB")), still(h[3])) for h, d in jpeg]
-    video = [(h, d) for h, d in stream(["vp09", "jpeg"], 14) if h[11] == 2]
-    decoded = _decoded_video(video, av.CodecContext.create("vp9", "r"))
-    assert len(decoded) >= 8
+    video = [(h, d) for h, d in stream(["vp09", "jpeg"], 16) if h[11] == 2]
+    decoded = [(h, img) for h, img in _decoded_video(video, av.CodecContext.create("vp9", "r")) if compared(h)]
+    assert len(decoded) >= 4
     video_ssim = [ssim(img, still(h[3])) for h, img in decoded[-4:]]
     assert np.mean(video_ssim) >= np.mean(jpeg_ssim)
     # steady frames (the first is a keyframe): bytes a frame

@@ -28,7 +28,7 @@ MAX_IN_FLIGHT = 2
 # at 30 fps in at most 1.5 Mbit/s at the SSIM of JPEG q80; VP9 reaches it at 1 Mbit/s:
 # `fogbank bench-codecs`), as pixels^0.75 otherwise, within VIDEO_BPS_RANGE, and at most
 # HEADROOM of the link's measured rate while the link limits the stream
-VIDEO_BPS_720P = 1.4e6
+VIDEO_BPS_720P = 1.45e6   # 1.48 Mbit/s, its half-octave step
 VIDEO_BPS_RANGE = (150e3, 6e6)
 
 
@@ -43,7 +43,7 @@ def video_bitrate(pixels: int, link_bps: float | None) -> int:
         bps = max(lo, min(bps, HEADROOM * link_bps))
     # in steps of half an octave: a new bitrate is a new encoder and a keyframe (libvpx
     # ignores one changed in place), so a rate that wanders within a step changes nothing
-    return int(2 ** (math.floor(2 * math.log2(bps)) / 2))
+    return int(2 ** (round(2 * math.log2(bps)) / 2))
 INPUT_SETTLE_S = 0.25     # after the last input, this long until the full-quality refinement
 VIEW_WAIT_S = 0.3         # a new session waits this long for its client's view size
 PREVIEW_QUALITY = 60      # JPEG quality while the user drags
