@@ -11,7 +11,6 @@ import socket
 import subprocess
 import sys
 import tempfile
-import threading
 import time
 import urllib.error
 import urllib.request
@@ -19,25 +18,14 @@ from pathlib import Path
 
 import websockets
 
+from fogbank.tools.link import run_in_thread
+
 DOCKER = Path(__file__).resolve().parents[1] / "docker"
 
 
-def run_async(coro):
-    """asyncio.run in a thread of its own: Playwright's sync API keeps a loop running in
-    the test thread once a browser is up."""
-    out = {}
-
-    def target():
-        try:
-            out["value"] = asyncio.run(coro)
-        except BaseException as exc:  # noqa: BLE001 - re-raised in the test thread
-            out["error"] = exc
-    t = threading.Thread(target=target)
-    t.start()
-    t.join()
-    if "error" in out:
-        raise out["error"]
-    return out["value"]
+# asyncio.run in a thread of its own: Playwright's sync API keeps a loop running in the
+# test thread once a browser is up (the link tools need the same)
+run_async = run_in_thread
 
 
 HEAVY = {"width": 1920, "height": 1080, "layers": [{"kind": "noise", "mode": "volume", "samples": 128}]}

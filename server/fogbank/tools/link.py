@@ -154,13 +154,13 @@ def watch_through(server_url: str, query: str, rate_bps: float | None, rtt_ms: f
                   size=(1280, 720), codecs: tuple[str, ...] = ("jpeg",)) -> dict:
     """`watch` through a Relay to the server at `server_url` (rate None and no delay: loopback)."""
     if rate_bps is None and not rtt_ms:
-        return _run(watch(server_url, query, seconds, size, codecs=codecs))
+        return run_in_thread(watch(server_url, query, seconds, size, codecs=codecs))
     port = int(server_url.rsplit(":", 1)[1])
     with Relay(port, rate_bps, rtt_ms) as relay:
-        return _run(watch(relay.url, query, seconds, size, codecs=codecs))
+        return run_in_thread(watch(relay.url, query, seconds, size, codecs=codecs))
 
 
-def _run(coro):
+def run_in_thread(coro):
     """asyncio.run in a thread of its own: a caller may have a loop running in its thread
     already (Playwright's sync API leaves one in a test process)."""
     import threading
@@ -191,10 +191,10 @@ def orbit_through(server_url: str, query: str, rate_bps: float | None, rtt_ms: f
                   size=(640, 360)) -> dict:
     """`orbit` through a Relay to the server at `server_url` (rate None: loopback, no relay)."""
     if rate_bps is None and not rtt_ms:
-        return _run(orbit(server_url, query, seconds, size))
+        return run_in_thread(orbit(server_url, query, seconds, size))
     port = int(server_url.rsplit(":", 1)[1])
     with Relay(port, rate_bps, rtt_ms) as relay:
-        return _run(orbit(relay.url, query, seconds, size))
+        return run_in_thread(orbit(relay.url, query, seconds, size))
 
 
 def summary(rows: list[dict]) -> str:
@@ -291,7 +291,7 @@ def bench(before_tree: str | None = None, seconds: float = 8.0, out: str | None 
     srv = ChildServer()
     try:   # this code only: the frames' fidelity, JPEG q80 and VP9, on loopback
         for codec in ("jpeg", "vp09"):
-            quality[codec] = _run(frames_vs_stills(srv.url, codec, seconds))
+            quality[codec] = run_in_thread(frames_vs_stills(srv.url, codec, seconds))
             print(f"  now    720p playing {codec:5s} {quality[codec]}", flush=True)
         for label, rate in (("720p playing VP9, 5 Mbit/s 40 ms", 5e6), ("720p playing VP9, 1 Mbit/s 40 ms", 1e6)):
             rows.setdefault(label, {})["now"] = watch_through(srv.url, "v=1", rate, 40, seconds, codecs=("vp09", "jpeg"))
