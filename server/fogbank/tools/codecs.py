@@ -11,11 +11,15 @@ from fractions import Fraction
 
 import numpy as np
 
+from fogbank.render.video import CODECS
+
 SIZES = ((640, 360), (1280, 720), (1920, 1080))
 RATES_720P = (0.5e6, 1e6, 1.5e6, 3e6)   # bits a second at 1280x720, in proportion to pixels elsewhere
+# VP8 and VP9 as the stream sets them (render/video.py CODECS), AV1 for the comparison:
+# (encoder, decoder, options)
 ENCODERS = {
-    "vp8": ("libvpx", "vp8", {"deadline": "realtime", "cpu-used": "8", "lag-in-frames": "0"}),
-    "vp9": ("libvpx-vp9", "vp9", {"deadline": "realtime", "cpu-used": "8", "lag-in-frames": "0", "row-mt": "1"}),
+    "vp8": (CODECS["vp8"][0], "vp8", CODECS["vp8"][1]),
+    "vp9": (CODECS["vp09"][0], "vp9", CODECS["vp09"][1]),
     "av1": ("libsvtav1", "libdav1d", {"preset": "12", "svtav1-params": "pred-struct=1:lp=2:rc=2"}),
 }
 
