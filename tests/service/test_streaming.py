@@ -284,7 +284,10 @@ def test_video_frames_start_on_a_keyframe_and_a_new_size_gets_one(client):
 def test_video_frames_are_as_close_to_the_stills_as_jpeg_q80_in_fewer_bytes(client):
     """The default look playing at 480x270: the VP9 frames' SSIM to the stills of their own
     times (GET /api/still.png, the reference) is no worse than the JPEG q80 frames', in at
-    most a third of their bytes."""
+    most a third of their bytes. Compared once the stream has settled: libvpx's realtime
+    rate control starts a stream on a keyframe below its steady quality (SSIM 0.9897 here,
+    JPEG q80 0.9906) and raises it over its first 10-20 frames (0.993 by the 20th); the
+    16th frame, compared before, sat on the line (0.9903 in one CI run)."""
     import av
     from fogbank.tools.codecs import ssim
 
@@ -307,10 +310,10 @@ def test_video_frames_are_as_close_to_the_stills_as_jpeg_q80_in_fewer_bytes(clie
     jpeg = [(h, d) for h, d in stream(["jpeg"], 12) if compared(h)][-4:]
     assert len(jpeg) == 4
     jpeg_ssim = [ssim(np.asarray(Image.open(io.BytesIO(d)).convert("RGB")), still(h[3])) for h, d in jpeg]
-    video = [(h, d) for h, d in stream(["vp09", "jpeg"], 16) if h[11] == 2]
+    video = [(h, d) for h, d in stream(["vp09", "jpeg"], 40) if h[11] == 2]
     decoded = [(h, img) for h, img in _decoded_video(video, av.CodecContext.create("vp9", "r")) if compared(h)]
     assert len(decoded) >= 4
     video_ssim = [ssim(img, still(h[3])) for h, img in decoded[-4:]]
     assert np.mean(video_ssim) >= np.mean(jpeg_ssim)
-    # steady frames (the first is a keyframe): bytes a frame
-    assert np.mean([len(d) for _, d in video[-6:]]) <= np.mean([len(d) for _, d in jpeg]) / 3
+    # bytes a frame over the stream, its first keyframe included
+    assert np.mean([len(d) for _, d in video]) <= np.mean([len(d) for _, d in jpeg]) / 3
