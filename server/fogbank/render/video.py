@@ -16,7 +16,7 @@ new bitrate (libvpx ignores a bitrate changed in place) starts on a keyframe, an
 stream a little below its steady quality and raises it over its first 10-20 frames (the
 default look at 480x270: SSIM 0.990 on the first keyframe, 0.993 by the 20th frame; JPEG
 q80 0.991); a bound on the quantizer (qmax 48-56) lifted only the smallest sizes' first
-keyframe and cost 20-60% more bytes in the steady stream, so it is left at libvpx's. An encoder holds about 80 MB at
+keyframe and cost 15-60% more bytes in the steady stream, so it is left at libvpx's. An encoder holds about 80 MB at
 1280x720 and 150 MB at 1920x1080 (libvpx's frame buffers), so a worker keeps them within
 a byte budget (VideoEncoders), and lets them all go when it passes its memory budget
 (workers/worker.py)."""
