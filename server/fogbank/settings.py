@@ -65,6 +65,9 @@ class Settings(BaseSettings):
                             "for a still already rendering wait for that render (single flight)")
     max_queued_stills: int = Field(64, ge=0, le=100000, description="distinct stills that may wait "
                                    "for one of max_stills places; beyond, 503 with Retry-After")
+    max_viewers: int = Field(64, ge=1, le=10000, description="viewers of one live session (a "
+                             "shared session's link); the next is refused with close code 1013. A viewer "
+                             "costs a socket and its share of the sends, not a render")
     messages_per_s: float = Field(120.0, gt=0, description="per-socket message rate (token bucket)")
     message_burst: int = Field(240, ge=1, description="per-socket burst of messages")
     max_sessions_per_client: int = Field(8, ge=1, le=10000, description="streaming sessions one "

@@ -17,6 +17,7 @@ RENDER_MS = Histogram("fogbank_render_ms", "render time of a frame or still, ms"
 ENCODE_MS = Histogram("fogbank_encode_ms", "encode time of a stream frame, ms", buckets=_MS,
                       registry=REGISTRY)
 SESSIONS = Gauge("fogbank_sessions", "open streaming sessions", registry=REGISTRY)
+VIEWERS = Gauge("fogbank_live_viewers", "viewers of live sessions (stream/live.py)", registry=REGISTRY)
 QUEUE = Gauge("fogbank_render_queue", "jobs waiting for the render thread", registry=REGISTRY)
 WORKER_RESTARTS = Counter("fogbank_worker_restarts_total", "render workers replaced, by lane and why "
                           "(deadline: killed past a job's deadline; died; memory: over its budget)",

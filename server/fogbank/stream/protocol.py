@@ -15,6 +15,9 @@ Client -> server, one JSON object per text message, told apart by "type":
     {"type": "interact", "active": true}                   a drag started/ended
     {"type": "ack", "frame": 17}                           frames up to 17 arrived
     {"type": "pong", "ping": 3}                            the answer to ping 3, at once
+    {"type": "share", "active": true}                      share this session live (or stop)
+    {"type": "control", "to": "a1b2c3"}                    hand control to a viewer (null:
+                                                           back to the presenter)
 
 Server -> client: text {"type": "hello" | "state" | "camera" | "error" | "view_stats" | "ping"
 | "link", ...} and
@@ -31,6 +34,15 @@ header's codec byte; a keyframe has FLAG_KEY).
     {"type": "ping", "ping": 3}                    answer with a pong: the link's round trip
     {"type": "link", "rate_bps": 4.8e6, "rtt_ms": 41, "stream_bps": 1.2e6, "limiting": true}
                                                    the link as the server measures it (stream/link.py)
+
+    {"type": "audience", "role": "presenter", "token": "...", "viewers": 3, "ids": [...],
+     "control": null, "you": null}                 who watches a live session and who controls it
+    {"type": "ended", "msg": "..."}                a live session ended (then closed, code 4410)
+
+A live session (stream/live.py): the presenter's page connects with `room=<token>` beside
+its look (the key its load balancer routes by), and "share" makes that token the live
+link; viewers connect with `live=<token>` alone and get the presenter's frames, state and
+"audience" messages. A viewer's look changes apply only while it has control.
 
 A reply to look changes waits while MAX_IN_FLIGHT frames are unacknowledged; the changes
 made meanwhile collapse into one reply, which `answers` of them (query, params, camera,
@@ -49,9 +61,10 @@ from fogbank.model.errors import clean, error, from_validation
 from fogbank.model.fields import MAX_LAYERS, Int
 from fogbank.model.urlstate import MAX_QUERY
 
+# 3: live sessions (share, control, audience, ended)
 # 2: the camera reply, replies that wait in the window ("answers"), ping/pong and "link",
 # video frames (the header's codec byte, FLAG_KEY; the view's "codecs")
-PROTOCOL = 2
+PROTOCOL = 3
 MAX_MESSAGE = 64 * 1024
 # magic, frame id, params version, sim time (s), render ms, encode ms, width, height,
 # jpeg quality, flags (bit 0: full quality, bit 1: playing, bit 2: reduced, bit 3: a
@@ -132,10 +145,22 @@ class PongMsg(_Msg):
     ping: int = Field(ge=0, le=2**32 - 1)
 
 
+class ShareMsg(_Msg):
+    type: Literal["share"]
+    active: bool = True
+
+
+class ControlMsg(_Msg):
+    type: Literal["control"]
+    # a viewer's id (an "audience" message's ids), or None: the presenter
+    to: str | None = Field(None, max_length=64)
+
+
 Message = Annotated[Union[QueryMsg, ParamsMsg, CameraMsg, PlayMsg, SpeedMsg, SeekMsg, ViewMsg,
-                          InteractMsg, AckMsg, PongMsg], Field(discriminator="type")]
+                          InteractMsg, AckMsg, PongMsg, ShareMsg, ControlMsg], Field(discriminator="type")]
 _adapter: TypeAdapter = TypeAdapter(Message)
-TYPES = ["query", "params", "camera", "play", "speed", "seek", "view", "interact", "ack", "pong"]
+TYPES = ["query", "params", "camera", "play", "speed", "seek", "view", "interact", "ack", "pong", "share",
+         "control"]
 
 
 class ProtocolError(ValueError):

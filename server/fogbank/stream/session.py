@@ -200,6 +200,8 @@ class Session:
         self.sent = 0             # id of the last frame sent
         self.link = Link()        # the viewer's link, from its acks (stream/link.py)
         self.need_key = False     # the next video frame must be a keyframe (one was dropped)
+        # the codecs every viewer of a live session decodes (stream/live.py; None: no viewers)
+        self.decoders: frozenset[str] | None = None
         self.fit = FrameFit()     # the quality and size of frame it carries
         self.last_start = -math.inf
         self.not_before = -math.inf   # no frame before this (redo's `after`)
@@ -630,7 +632,7 @@ class Session:
         quality = min(v.quality, PREVIEW_QUALITY) if preview else v.quality
         # video for the frames drawn while time runs (the view's own size: a new size is a
         # keyframe), JPEG for previews, a paused look's final frame and views that teach
-        codec = next((c for c in v.codecs if c != "jpeg"), "jpeg")
+        codec = next((c for c in v.codecs if c != "jpeg" and (self.decoders is None or c in self.decoders)), "jpeg")
         video = codec != "jpeg" and not preview and self.playing and self.showing() == "shaded"
         bitrate = 0
         if video:

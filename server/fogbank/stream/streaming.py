@@ -38,21 +38,16 @@ from fogbank.workers import cost
 from fogbank.service import metrics
 
 from fogbank.workers import worker
-from fogbank.stream.protocol import (FLAG_FULL, FLAG_KEY, FLAG_PLAYING, FLAG_REDUCED, MAX_MESSAGE, PROTOCOL, CameraMsg,
-                                     HEADER, ParamsMsg, ProtocolError, QueryMsg, SeekMsg, frame_header,
+from fogbank.stream.protocol import (FLAG_FULL, FLAG_KEY, FLAG_PLAYING, FLAG_REDUCED, MAX_MESSAGE, PROTOCOL, HEADER, ProtocolError, QueryMsg, frame_header,
                                      parse)
 from fogbank.stream.link import PING_EVERY_S
-from fogbank.stream.session import MAX_IN_FLIGHT, PLAY_BUDGET_MS, REFINE_BUDGET_MS, FrameJob, Session
+from fogbank.stream import live
+from fogbank.stream.live import Audience
+from fogbank.stream.peer import LOOK_CHANGE_TYPES, Peer, apply_change
+from fogbank.stream.session import PLAY_BUDGET_MS, REFINE_BUDGET_MS, FrameJob, Session
 from fogbank.workers.supervisor import DeadlineExceeded, Slot, Supervisor, WorkerError
 
 log = logging.getLogger("fogbank.stream")
-
-
-# replies that wait for room in the window and collapse (Client.owe), and the messages that
-# change the look, each counted in the reply's "answers"
-OWED = ("state", "camera")
-LOOK_CHANGES = (QueryMsg, ParamsMsg, CameraMsg, SeekMsg)
-LOOK_CHANGE_TYPES = {"query", "params", "camera", "seek"}
 
 
 def _type_of(data: str | bytes) -> Any:
@@ -104,14 +99,13 @@ def fair_charge(ms: float) -> float:
     return ms * min(FAIR_MAX_FACTOR, max(1.0, ms / FAIR_FRAME_MS))
 
 
-class Client:
+class Client(Peer):
+    """A session's own socket (its presenter, when it is shared live)."""
+
     def __init__(self, session: Session, ws: WebSocket, addr: str, now: float):
-        self.session = session
-        self.ws = ws
+        super().__init__(session, ws)
         self.addr = addr
         self.slot: Slot | None = None
-        self.send_lock = asyncio.Lock()
-        self.closed = False
         self.last_message = now
         self.unacked_since: float | None = None   # oldest frame sent and not yet acknowledged
         self.stalls = 0   # frames in a row that missed their deadline on a stalled worker
@@ -119,49 +113,15 @@ class Client:
         self.vtime = 0.0     # ms of worker time its frames took (Streamer._pick's fair share)
         self.held_since: float | None = None   # due, and held for a session due soon, since
         self.connected = now
-        # The reply owed to look changes and not sent yet ("camera" or "state"; a "state"
-        # covers a camera), and how many look changes it answers. Replies go out only while
-        # the flow-control window has room (or just before a frame), so text never queues
-        # behind a slow link, and changes made meanwhile collapse into one reply.
         self.link_told = -1e9   # when the page was last told the link's estimate
-        self.owed: str | None = None
-        self.owed_answers = 0
+        self.room: str | None = None   # the token its live link would have (stream/live.py)
+        self.audience: Audience | None = None   # its viewers, while it is shared live
 
-    def owe(self, kind: str, answers: int) -> None:
-        self.owed = "state" if "state" in (kind, self.owed) else kind
-        self.owed_answers += answers
-
-    async def pay(self, now: float, force: bool = False) -> None:
-        """Send the owed reply, built from the session as it is now, if fewer than
-        MAX_IN_FLIGHT frames are unacknowledged (or `force`: a frame follows it)."""
-        s = self.session
-        if self.owed is None or (not force and s.sent - s.acked >= MAX_IN_FLIGHT):
-            return
-        msg = s.state(now) if self.owed == "state" else s.camera_state()
-        msg["answers"] = self.owed_answers
-        self.owed, self.owed_answers = None, 0
-        await self.send_json(msg)
-
-    async def answer_error(self, msg: dict[str, Any], answers: int, now: float) -> None:
-        """An error; one that answers a look change (`answers` 1) goes after the replies
-        owed to the changes before it, so that the client reads its answers in order."""
-        if answers:
-            await self.pay(now, force=True)
-        await self.send_json({**msg, "answers": answers})
+    def unacked(self) -> int:
+        return self.session.sent - self.session.acked
 
     async def ping(self, now: float) -> None:
         await self.send_json({"type": "ping", "ping": self.session.link.ping(now)})
-
-    async def send_json(self, msg: dict[str, Any]) -> None:
-        # ASCII JSON: user text echoed in an error (a field name, a value) may hold lone
-        # surrogates, which cannot be encoded as UTF-8 and took the socket down
-        text = json.dumps(msg)
-        async with self.send_lock:
-            await self.ws.send_text(text)
-
-    async def send_bytes(self, data: bytes) -> None:
-        async with self.send_lock:
-            await self.ws.send_bytes(data)
 
 
 class Streamer:
@@ -172,6 +132,7 @@ class Streamer:
         self.frames_per_worker = frames_per_worker
         self.clock = clock
         self.clients: OrderedDict[str, Client] = OrderedDict()
+        self.live: dict[str, Client] = {}   # live sessions by their token (stream/live.py)
         self.frames: dict[int, int] = {}   # frames being made, by interactive worker index
         self._wake = asyncio.Event()
         self._tasks: list[asyncio.Task] = []
@@ -423,6 +384,10 @@ class Streamer:
                 if out.get("stats"):   # a view that teaches: its numbers and legend first
                     await client.send_json({"type": "view_stats", "frame": job.frame, **out["stats"]})
                 await client.send_bytes(header + out["data"])
+                if client.audience is not None:   # the same bytes to its viewers (stream/live.py)
+                    stats = {"type": "view_stats", "frame": job.frame, **out["stats"]} if out.get("stats") else None
+                    await client.audience.fan_out(job.frame, job.codec, bool(out.get("key")),
+                                                  header + out["data"], stats, now)
                 if client.unacked_since is None:
                     client.unacked_since = self.clock()
                 sent = True
@@ -486,6 +451,9 @@ class Streamer:
             await asyncio.sleep(min(1.0, cfg.idle_timeout_s / 4, cfg.ack_timeout_s / 4))
             now = self.clock()
             for c in list(self.clients.values()):
+                for v in list(c.audience.viewers.values()) if c.audience else []:
+                    if now - v.last_message > cfg.idle_timeout_s:
+                        v.close(IDLE_CLOSE, f"idle: no message for {cfg.idle_timeout_s:g} s")
                 reason = None
                 if now - c.last_message > cfg.idle_timeout_s:
                     reason = f"idle: no message for {cfg.idle_timeout_s:g} s"
@@ -552,6 +520,10 @@ async def websocket_endpoint(ws: WebSocket, streamer: Streamer, renderer_info: d
     cfg = streamer.settings
     await ws.accept()
     addr = ws.client.host if ws.client else "?"
+    query, room, token = live.split_live(ws.url.query)
+    if token is not None:   # a viewer of a live session: no session, no render of its own
+        await live.viewer_endpoint(ws, streamer, token, addr, renderer_info)
+        return
     refusal = None
     yielded: list[Client] = []
     # check and register with no await in between: sessions connecting at once must not
@@ -579,9 +551,9 @@ async def websocket_endpoint(ws: WebSocket, streamer: Streamer, renderer_info: d
     bucket = TokenBucket(cfg.messages_per_s, cfg.message_burst, now)
     session = Session(uuid.uuid4().hex[:12], now)
     client = Client(session, ws, addr, now)
+    client.room = room
     streamer.add(client)
     try:
-        query = ws.url.query
         initial = session.apply(QueryMsg(type="query", query=query), now) if query else [session.state(now)]
         await client.send_json({"type": "hello", "protocol": PROTOCOL, "session": session.id,
                                 "renderer": renderer_info.get("renderer"),
@@ -625,12 +597,9 @@ async def websocket_endpoint(ws: WebSocket, streamer: Streamer, renderer_info: d
                                           int(_type_of(data) in LOOK_CHANGE_TYPES), streamer.clock())
                 continue
             acked = session.acked
-            for out in session.apply(parsed, streamer.clock()):
-                if out["type"] in OWED:
-                    client.owe(out["type"], int(isinstance(parsed, LOOK_CHANGES)))
-                else:
-                    await client.answer_error(out, int(isinstance(parsed, LOOK_CHANGES)), streamer.clock())
-            await client.pay(streamer.clock())
+            if not await live.presenter_message(client, parsed, streamer, streamer.clock()):
+                await apply_change(session, parsed, client, client.audience.others(client) if client.audience else [],
+                                   streamer.clock())
             if session.acked != acked:   # progress: the oldest unacknowledged frame is newer
                 client.unacked_since = None if session.acked >= session.sent else streamer.clock()
             streamer.wake()
@@ -638,6 +607,7 @@ async def websocket_endpoint(ws: WebSocket, streamer: Streamer, renderer_info: d
         pass
     finally:
         streamer.remove(client)
+        live.end_live(client, streamer, "the presenter left; this live session has ended")
         log.info("session closed", extra={"session": session.id, "frames": session.sent})
         if ws.client_state == WebSocketState.CONNECTED:
             try:

@@ -1,0 +1,429 @@
+"""Live sessions (issue 34): one session's frames, drawn and encoded once, sent to every
+viewer of its live link.
+
+The presenter's page connects with `room=<token>` beside its look: a random key that the
+load balancer routes /ws by (docker/nginx/fogbank.conf hashes `live` and `room`), and which
+"share" makes the live link's token. A viewer connects with `live=<token>` alone and so
+reaches the replica that holds the session. A token is 16-64 URL-safe characters; a
+presenter that gave none (or one in use) is given a random one, reachable directly.
+
+A viewer gets the presenter's frames as they are (its codec, size and quality), the look's
+state and camera replies, and "audience" messages (how many watch, who has control). It
+costs no render and no encode: its frames are the presenter's bytes. Each viewer has its
+own window (MAX_IN_FLIGHT frames unacknowledged) and its own sender task, so a slow viewer
+never slows the presenter or the others: it skips frames, and in video then waits for the
+next keyframe, which the session is asked for at most every KEY_EVERY_S. A new viewer gets
+a keyframe at once, and a paused look's frame is drawn again for it. What a viewer has
+queued is bounded (its window's frames, one owed reply, one audience message, and at most
+MAX_QUEUED texts): one that stops reading is closed.
+
+The presenter can hand control to a viewer ("control"): then that viewer's look changes
+apply to the session (and the presenter's do not) until the presenter takes it back or the
+viewer gives it back. A presenter who leaves or stops sharing ends the session for its
+viewers: an "ended" message with the reason, then close code 4410. A viewer who leaves
+costs nothing.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import logging
+import math
+import re
+import secrets
+import uuid
+from collections import deque
+from typing import TYPE_CHECKING, Any
+
+from starlette.websockets import WebSocket, WebSocketDisconnect
+
+from fogbank.service import metrics
+from fogbank.stream.peer import LOOK_CHANGES, STEERING, Peer, apply_change
+from fogbank.stream.protocol import (MAX_MESSAGE, PROTOCOL, AckMsg, ControlMsg, InteractMsg, PongMsg, ProtocolError,
+                                     ShareMsg, ViewMsg, parse)
+from fogbank.stream.session import MAX_IN_FLIGHT, PLAY_BUDGET_MS, REFINE_BUDGET_MS, Session
+
+if TYPE_CHECKING:
+    from fogbank.stream.streaming import Client
+
+log = logging.getLogger("fogbank.stream")
+
+ENDED_CLOSE = 4410   # the live session ended (the presenter left or stopped sharing)
+NO_SUCH_CLOSE = 4404   # no live session has this token (here)
+TOKEN = re.compile(r"[A-Za-z0-9_-]{16,64}")
+KEY_EVERY_S = 1.0    # a viewer that skipped video frames waits for a keyframe asked at most this often
+MAX_QUEUED = 64      # texts a viewer may leave unread (its errors, mostly) before it is closed
+
+
+def split_live(query: str) -> tuple[str, str | None, str | None]:
+    """The look's query, and the `room` and `live` tokens beside it (None: absent). A
+    `live` that is not a token is returned as it is (the caller refuses it); a `room` that
+    is not one is dropped (the session is given a token when shared)."""
+    look, room, live = [], None, None
+    for part in query.split("&") if query else []:
+        if part.startswith("room="):
+            room = part[5:] if TOKEN.fullmatch(part[5:]) else None
+        elif part.startswith("live="):
+            live = part[5:]
+        elif part:
+            look.append(part)
+    return "&".join(look), room, live
+
+
+class Viewer(Peer):
+    """A viewer's socket: its messages go out in order from its own task (`_run`)."""
+
+    def __init__(self, vid: str, session: Session, ws: WebSocket, addr: str, now: float):
+        super().__init__(session, ws)
+        self.id, self.addr = vid, addr
+        self.inflight: dict[int, float] = {}   # frame id -> when sent, not yet acknowledged
+        self.waiting_key = True   # video frames wait for a keyframe (a new viewer, or one that skipped)
+        self.codecs: tuple[str, ...] = ("jpeg",)   # what its page decodes (its view message)
+        self.last_message = now
+        self.frames = 0    # frames sent to it
+        self.skipped = 0   # frames it did not get (its window full, or waiting for a keyframe)
+        self.audience_due = False   # an "audience" message is owed (built when it goes)
+        self._out: deque[tuple[str, Any]] = deque()
+        self._wake = asyncio.Event()
+        self._close: tuple[int, str] | None = None
+        self._task: asyncio.Task | None = None
+
+    def unacked(self) -> int:
+        return len(self.inflight)
+
+    def ack(self, frame: int) -> None:
+        for f in [f for f in self.inflight if f <= frame]:
+            del self.inflight[f]
+
+    async def send_json(self, msg: dict[str, Any]) -> None:
+        self._put("text", json.dumps(msg))
+
+    async def send_bytes(self, data: bytes) -> None:
+        self._put("bytes", data)
+
+    def _put(self, kind: str, data: Any) -> None:
+        if self.closed or self._close:
+            return
+        if kind == "text" and sum(k == "text" for k, _ in self._out) >= MAX_QUEUED:
+            self.close(1008, "messages left unread")
+            return
+        self._out.append((kind, data))
+        self._wake.set()
+
+    def close(self, code: int, reason: str) -> None:
+        """Close after what is queued."""
+        if self._close is None:
+            self._close = (code, reason)
+            self._wake.set()
+
+    def start(self, audience: "Audience") -> None:
+        self._task = asyncio.get_running_loop().create_task(self._run(audience), name=f"fogbank-viewer-{self.id}")
+
+    async def _run(self, audience: "Audience") -> None:
+        try:
+            while True:
+                await self._wake.wait()
+                self._wake.clear()
+                while True:
+                    if self._out:   # in order; then the audience as it is now
+                        kind, data = self._out.popleft()
+                        await (self.ws.send_text(data) if kind == "text" else self.ws.send_bytes(data))
+                    elif self.audience_due:
+                        self.audience_due = False
+                        await self.ws.send_text(json.dumps(audience.message(self)))
+                    else:
+                        break
+                if self._close:
+                    await self.ws.close(code=self._close[0], reason=self._close[1])
+                    return
+        except asyncio.CancelledError:
+            raise
+        except Exception:  # noqa: BLE001 - the viewer is gone; its endpoint removes it
+            pass
+        finally:
+            self.closed = True
+            self._out.clear()
+
+    async def stop(self) -> None:
+        if self._task is not None and not self._task.done():
+            self._task.cancel()
+            try:
+                await self._task
+            except asyncio.CancelledError:
+                pass
+
+
+class Audience:
+    """The viewers of one presenter's session, and who has control (None: the presenter)."""
+
+    def __init__(self, presenter: "Client", token: str):
+        self.presenter = presenter
+        self.token = token
+        self.viewers: dict[str, Viewer] = {}
+        self.control: str | None = None
+        self.key_asked = -math.inf
+
+    @property
+    def session(self) -> Session:
+        return self.presenter.session
+
+    def message(self, peer: Peer) -> dict[str, Any]:
+        presenter = peer is self.presenter
+        msg = {"type": "audience", "role": "presenter" if presenter else "viewer", "token": self.token,
+               "viewers": len(self.viewers), "control": self.control,
+               "you": None if presenter else getattr(peer, "id", None)}
+        if presenter:
+            msg["ids"] = list(self.viewers)
+        return msg
+
+    async def tell(self) -> None:
+        """Everyone is told who watches and who has control (a viewer's message is built
+        when its turn comes, so that several changes send one)."""
+        for v in self.viewers.values():
+            v.audience_due = True
+            v._wake.set()
+        if not self.presenter.closed:
+            try:
+                await self.presenter.send_json(self.message(self.presenter))
+            except Exception:  # noqa: BLE001 - the presenter is gone; its endpoint ends this
+                pass
+
+    def others(self, peer: Peer) -> list[Peer]:
+        """The sockets told of a change that `peer` made (answers 0)."""
+        out: list[Peer] = [v for v in self.viewers.values() if v is not peer]
+        if peer is not self.presenter:
+            out.append(self.presenter)
+        return out
+
+    def controls(self, peer: Peer) -> bool:
+        if peer is self.presenter:
+            return self.control is None
+        return self.control == getattr(peer, "id", None)
+
+    def _codecs(self) -> None:
+        """The session's video codec must be one every viewer decodes (else JPEG)."""
+        if not self.viewers:
+            self.session.decoders = None
+        else:
+            self.session.decoders = frozenset.intersection(*(frozenset(v.codecs) for v in self.viewers.values()))
+
+    def join(self, viewer: Viewer) -> None:
+        self.viewers[viewer.id] = viewer
+        self._codecs()
+        s = self.session
+        s.need_key = True   # its first video frame stands alone
+        s.redo()            # a paused look is drawn again for it
+        metrics.VIEWERS.inc()
+
+    def leave(self, viewer: Viewer) -> bool:
+        if self.viewers.pop(viewer.id, None) is None:
+            return False
+        metrics.VIEWERS.dec()
+        if self.control == viewer.id:
+            self.control = None
+        self._codecs()
+        return True
+
+    def set_codecs(self, viewer: Viewer, codecs: tuple[str, ...]) -> None:
+        if codecs != viewer.codecs:
+            viewer.codecs = codecs
+            viewer.waiting_key = True
+            self.session.need_key = True
+            self._codecs()
+
+    async def fan_out(self, frame: int, codec: str, key: bool, data: bytes, stats: dict[str, Any] | None,
+                      now: float) -> None:
+        """The presenter's frame (header and bytes), to every viewer with room for it."""
+        video = codec != "jpeg"
+        for v in list(self.viewers.values()):
+            if v.closed:
+                continue
+            if v.unacked() >= MAX_IN_FLIGHT or (video and (v.waiting_key and not key or codec not in v.codecs)):
+                v.skipped += 1
+                v.waiting_key = v.waiting_key or video   # its decoder lost the chain
+                continue
+            if video:
+                v.waiting_key = False
+            v.inflight[frame] = now
+            v.frames += 1
+            await v.pay(now, force=True)   # the look's reply before its frame
+            if stats:
+                await v.send_json(stats)
+            await v.send_bytes(data)
+        if video and now - self.key_asked >= KEY_EVERY_S and any(v.waiting_key for v in self.viewers.values()):
+            self.key_asked = now
+            self.session.need_key = True
+
+    def end(self, reason: str) -> None:
+        """The live session is over: each viewer is told why, then closed."""
+        for v in list(self.viewers.values()):
+            self.leave(v)
+            v._put("text", json.dumps({"type": "ended", "msg": reason}))
+            v.close(ENDED_CLOSE, reason[:120])
+
+
+def new_token(streamer: Any, room: str | None) -> str:
+    """The live link's token: the room the presenter's page connected with (its load
+    balancer routed it by that), unless another live session holds it."""
+    if room and room not in streamer.live:
+        return room
+    return secrets.token_urlsafe(16)
+
+
+async def presenter_message(client: "Client", parsed: Any, streamer: Any, now: float) -> bool:
+    """A presenter's "share" or "control" message, or a look change while a viewer has
+    control; True when handled here."""
+    audience = client.audience
+    if isinstance(parsed, ShareMsg):
+        if parsed.active and audience is None:
+            client.audience = audience = Audience(client, new_token(streamer, client.room))
+            streamer.live[audience.token] = client
+            log.info("session shared live", extra={"session": client.session.id})
+            await audience.tell()
+        elif parsed.active:
+            await audience.tell()
+        elif audience is not None:
+            end_live(client, streamer, "the presenter stopped sharing; this live session has ended")
+            await client.send_json({"type": "audience", "role": "presenter", "token": None, "viewers": 0,
+                                    "control": None, "you": None, "ids": []})
+        return True
+    if isinstance(parsed, ControlMsg):
+        if audience is None:
+            await client.send_json({"type": "error", "loc": ["message", "type"],
+                                    "msg": "control is handed to a viewer of a live session: share it first"})
+        elif parsed.to is not None and parsed.to not in audience.viewers:
+            ids = ", ".join(audience.viewers) or "none now"
+            await client.send_json({"type": "error", "loc": ["message", "to"],
+                                    "msg": f"no viewer {parsed.to!r} watches this session (its viewers: {ids})"})
+        else:
+            audience.control = parsed.to
+            await audience.tell()
+        return True
+    if audience is not None and not audience.controls(client) and isinstance(parsed, STEERING):
+        if isinstance(parsed, InteractMsg):
+            return True
+        await client.answer_error({"type": "error", "loc": ["message", "type"],
+                                   "msg": f"viewer {audience.control} has control of the look; take it back "
+                                          "(Live, Take back control) to change it"},
+                                  int(isinstance(parsed, LOOK_CHANGES)), now)
+        return True
+    return False
+
+
+def end_live(client: "Client", streamer: Any, reason: str) -> None:
+    audience = client.audience
+    if audience is None:
+        return
+    client.audience = None
+    if streamer.live.get(audience.token) is client:
+        del streamer.live[audience.token]
+    client.session.decoders = None
+    audience.end(reason)
+    log.info("live session ended", extra={"session": client.session.id, "reason": reason})
+
+
+async def viewer_endpoint(ws: WebSocket, streamer: Any, token: str, addr: str, renderer_info: dict) -> None:
+    """/ws?live=<token>: one viewer of a live session."""
+    cfg = streamer.settings
+    presenter = streamer.live.get(token) if TOKEN.fullmatch(token) else None
+    audience = presenter.audience if presenter is not None else None
+    refusal = None
+    if audience is None:
+        refusal = (NO_SUCH_CLOSE, "no live session has this link here: it has ended, or the link is not whole "
+                   "(ask the presenter for it again)")
+    elif len(audience.viewers) >= cfg.max_viewers:
+        refusal = (1013, f"this live session has its most viewers ({cfg.max_viewers}); retry later")
+    if refusal:
+        try:
+            await ws.send_json({"type": "error", "loc": ["live"], "msg": refusal[1]})
+            await ws.close(code=refusal[0], reason=refusal[1][:120])
+        except WebSocketDisconnect:
+            pass
+        return
+    now = streamer.clock()
+    session = presenter.session
+    viewer = Viewer(uuid.uuid4().hex[:8], session, ws, addr, now)
+    viewer.start(audience)
+    await viewer.send_json({"type": "hello", "protocol": PROTOCOL, "session": session.id,
+                            "renderer": renderer_info.get("renderer"), "max_message": MAX_MESSAGE,
+                            "refine_budget_ms": REFINE_BUDGET_MS, "play_budget_ms": PLAY_BUDGET_MS,
+                            "live": {"role": "viewer", "id": viewer.id}})
+    await viewer.send_json(session.state(now))
+    audience.join(viewer)
+    await audience.tell()
+    streamer.wake()
+    log.info("viewer joined", extra={"session": session.id, "viewer": viewer.id})
+    from fogbank.stream.streaming import TokenBucket
+    bucket = TokenBucket(cfg.messages_per_s, cfg.message_burst, now)
+    try:
+        while not viewer.closed:
+            msg = await ws.receive()
+            if msg["type"] == "websocket.disconnect":
+                break
+            data = msg.get("text")
+            if data is None:
+                data = msg.get("bytes") or b""
+            size = len(data.encode("utf-8")) if isinstance(data, str) else len(data)
+            if size > MAX_MESSAGE:
+                viewer.close(1009, f"message over {MAX_MESSAGE} bytes")
+                break
+            now = streamer.clock()
+            viewer.last_message = now
+            if not bucket.take(now):
+                metrics.ERRORS.labels("rate").inc()
+                if bucket.should_notify():
+                    await viewer.send_json({"type": "error", "loc": ["message"],
+                                            "msg": f"over {cfg.messages_per_s:g} messages/s: messages are "
+                                                   "dropped until the rate falls"})
+                continue
+            if presenter.audience is not audience:   # ended meanwhile: its messages go nowhere
+                break
+            try:
+                parsed = parse(data)
+            except ProtocolError as exc:
+                await viewer.send_json({"type": "error", "detail": exc.errors, "msg": str(exc)})
+                continue
+            if isinstance(parsed, AckMsg):
+                viewer.ack(parsed.frame)
+                await viewer.pay(now)
+            elif isinstance(parsed, PongMsg):
+                pass
+            elif isinstance(parsed, ViewMsg):   # its codecs; the size is the presenter's
+                audience.set_codecs(viewer, tuple(parsed.codecs))
+                streamer.wake()
+            elif isinstance(parsed, ShareMsg):
+                await viewer.send_json({"type": "error", "loc": ["message", "type"],
+                                        "msg": "only the presenter shares a live session"})
+            elif isinstance(parsed, ControlMsg):
+                if parsed.to is None and audience.control == viewer.id:   # handed back
+                    audience.control = None
+                    await audience.tell()
+                else:
+                    await viewer.send_json({"type": "error", "loc": ["message", "type"],
+                                            "msg": "only the presenter hands control over; a viewer with "
+                                                   "control may give it back (to: null)"})
+            elif audience.controls(viewer):
+                await apply_change(session, parsed, viewer, audience.others(viewer), now)
+                streamer.wake()
+            elif isinstance(parsed, InteractMsg):
+                pass
+            else:
+                await viewer.answer_error({"type": "error", "loc": ["message", "type"],
+                                           "msg": "you are watching a live session: the presenter has control "
+                                                  "of the look (open it on your own with Copy link)"},
+                                          int(isinstance(parsed, LOOK_CHANGES)), now)
+    except WebSocketDisconnect:
+        pass
+    finally:
+        if audience.leave(viewer):
+            await audience.tell()
+        log.info("viewer left", extra={"session": session.id, "viewer": viewer.id, "frames": viewer.frames,
+                                       "skipped": viewer.skipped})
+        if viewer._close is None:
+            viewer.close(1000, "")
+        if viewer._task is not None:   # what it has queued goes out, then its socket closes
+            try:
+                await asyncio.wait_for(asyncio.shield(viewer._task), 2.0)
+            except (asyncio.TimeoutError, Exception):  # noqa: BLE001
+                await viewer.stop()

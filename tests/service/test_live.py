@@ -1,0 +1,233 @@
+"""Live sessions end to end (issue 34, stream/live.py; Starlette's test client, the real
+renderer): a shared session's viewers get the presenter's own frames (one render, one
+encode), the look and who watches; control is handed over and back; a slow viewer skips
+to the next keyframe without slowing the others; a presenter who leaves ends it."""
+
+from __future__ import annotations
+
+import json
+import threading
+import time
+
+import pytest
+from starlette.websockets import WebSocketDisconnect
+
+from fogbank.stream.protocol import CODEC_IDS, FLAG_KEY, HEADER
+
+VIEW = {"type": "view", "width": 96, "height": 64, "fps": 60, "quality": 80}
+ROOM = "room-for-the-tests-0001"
+
+
+def read(ws, n_frames=0, until=None, ack=True, timeout=20.0):
+    """Frames ([(header, bytes)]) and texts until `n_frames` frames came and `until`
+    (a predicate on a text) matched, if given."""
+    frames, texts = [], []
+    t0 = time.monotonic()
+    matched = until is None
+    while (len(frames) < n_frames or not matched) and time.monotonic() - t0 < timeout:
+        m = ws.receive()
+        if m.get("bytes"):
+            h = HEADER.unpack(m["bytes"][:HEADER.size])
+            frames.append((h, m["bytes"]))
+            if ack:
+                ws.send_json({"type": "ack", "frame": h[1]})
+        elif m.get("text"):
+            msg = json.loads(m["text"])
+            texts.append(msg)
+            matched = matched or until(msg)
+        elif m.get("type") == "websocket.close":
+            raise WebSocketDisconnect(m.get("code", 1000), m.get("reason"))
+    assert len(frames) >= n_frames
+    assert matched
+    return frames, texts
+
+
+def share(ws):
+    """Share the presenter's session: the audience message with its token."""
+    ws.send_json({"type": "share"})
+    _, texts = read(ws, until=lambda m: m["type"] == "audience")
+    return next(m for m in texts if m["type"] == "audience")
+
+
+def presenter(client, query="time=3"):
+    ws = client.websocket_connect(f"/ws?{query}&room={ROOM}")
+    ws.__enter__()
+    ws.receive_json(), ws.receive_json()   # hello, state
+    ws.send_json(VIEW)
+    return ws
+
+
+def viewer(client, token):
+    ws = client.websocket_connect(f"/ws?live={token}")
+    ws.__enter__()
+    hello = ws.receive_json()
+    assert hello["type"] == "hello"
+    assert hello["live"]["role"] == "viewer"
+    return ws, hello["live"]["id"]
+
+
+def test_a_shared_session_takes_the_room_as_its_token_and_viewers_get_its_own_frames(client):
+    p = presenter(client)
+    try:
+        aud = share(p)
+        assert (aud["role"], aud["token"], aud["viewers"], aud["control"]) == ("presenter", ROOM, 0, None)
+        v, vid = viewer(client, ROOM)
+        try:
+            state = v.receive_json()
+            assert state["type"] == "state"
+            assert "time=" in state["query"]
+            _, texts = read(p, until=lambda m: m["type"] == "audience" and m["viewers"] == 1)
+            assert [m["ids"] for m in texts if m["type"] == "audience"][-1] == [vid]
+            box = {}
+            t = threading.Thread(target=lambda: box.update(p=read(p, 12)[0]))
+            t.start()
+            vf, vt = read(v, 8)
+            t.join(30)
+            mine = {h[1]: data for h, data in box["p"]}
+            # every frame the viewer got is one of the presenter's, byte for byte: drawn and
+            # encoded once, not once a viewer
+            theirs = [(h[1], data) for h, data in vf if h[1] in mine]
+            assert len(theirs) >= 6
+            assert all(mine[f] == data for f, data in theirs)
+            assert next(m for m in vt if m["type"] == "audience")["you"] == vid
+        finally:
+            v.__exit__(None, None, None)
+        _, texts = read(p, until=lambda m: m["type"] == "audience" and m["viewers"] == 0)
+    finally:
+        p.__exit__(None, None, None)
+
+
+def test_control_is_handed_to_a_viewer_and_back(client):
+    p = presenter(client, "time=3&play=0")
+    try:
+        share(p)
+        v, vid = viewer(client, ROOM)
+        try:
+            read(p, until=lambda m: m["type"] == "audience" and m["viewers"] == 1)
+            # a viewer without control: its change is refused, the look unchanged
+            v.send_json({"type": "params", "params": {"wind": {"speed": 7}}})
+            _, texts = read(v, until=lambda m: m["type"] == "error")
+            err = next(m for m in texts if m["type"] == "error")
+            assert "presenter has control" in err["msg"]
+            assert err["answers"] == 1
+            p.send_json({"type": "control", "to": "nobody"})
+            _, texts = read(p, until=lambda m: m["type"] == "error")
+            assert vid in next(m for m in texts if m["type"] == "error")["msg"]
+            p.send_json({"type": "control", "to": vid})
+            read(v, until=lambda m: m["type"] == "audience" and m["control"] == vid and m["you"] == vid)
+            read(p, until=lambda m: m["type"] == "audience" and m["control"] == vid)
+            v.send_json({"type": "params", "params": {"wind": {"speed": 7}}})
+            _, texts = read(v, until=lambda m: m["type"] == "state" and m["params"]["wind"]["speed"] == 7)
+            assert [m["answers"] for m in texts if m["type"] == "state"][-1] == 1
+            # the presenter sees the change (answering none of its own), and cannot steer meanwhile
+            _, texts = read(p, until=lambda m: m["type"] == "state" and m["params"]["wind"]["speed"] == 7)
+            assert [m["answers"] for m in texts if m["type"] == "state"][-1] == 0
+            p.send_json({"type": "params", "params": {"wind": {"speed": 2}}})
+            _, texts = read(p, until=lambda m: m["type"] == "error")
+            assert "has control" in next(m for m in texts if m["type"] == "error")["msg"]
+            # the viewer gives it back; the presenter steers again
+            v.send_json({"type": "control", "to": None})
+            read(p, until=lambda m: m["type"] == "audience" and m["control"] is None)
+            p.send_json({"type": "params", "params": {"wind": {"speed": 2}}})
+            read(v, until=lambda m: m["type"] == "state" and m["params"]["wind"]["speed"] == 2)
+        finally:
+            v.__exit__(None, None, None)
+    finally:
+        p.__exit__(None, None, None)
+
+
+def test_a_presenter_who_leaves_ends_the_session_for_its_viewers(client):
+    p = presenter(client)
+    share(p)
+    v, _ = viewer(client, ROOM)
+    try:
+        read(v, 2)
+        p.__exit__(None, None, None)
+        with pytest.raises(WebSocketDisconnect) as exc:
+            read(v, until=lambda m: False, timeout=10)
+        assert exc.value.code == 4410
+        # and the link now leads nowhere, said so
+        w = client.websocket_connect(f"/ws?live={ROOM}")
+        with w:
+            err = w.receive_json()
+            assert err["loc"] == ["live"]
+            assert "no live session" in err["msg"]
+            with pytest.raises(WebSocketDisconnect) as exc:
+                w.receive_json()
+            assert exc.value.code == 4404
+    finally:
+        v.__exit__(None, None, None)
+
+
+def test_a_bad_live_token_is_refused_with_a_reason(client):
+    with client.websocket_connect("/ws?live=%3Cscript%3E") as w:
+        err = w.receive_json()
+        assert err["type"] == "error" and err["loc"] == ["live"]
+        with pytest.raises(WebSocketDisconnect) as exc:
+            w.receive_json()
+        assert exc.value.code == 4404
+
+
+def test_a_slow_viewer_skips_to_a_keyframe_without_slowing_the_others(client):
+    """VP9 frames: a viewer that acknowledges nothing gets at most its window (2 frames);
+    a viewer that keeps up is not slowed (it gets at least 90% of the presenter's frames),
+    and its first video frame is a keyframe (a late joiner starts on one). The slow one,
+    acknowledging again, resumes on a keyframe."""
+    p = presenter(client)
+    open_ = [p]
+    try:
+        p.send_json({**VIEW, "codecs": ["vp09", "jpeg"]})
+        share(p)
+        read(p, 6)
+        slow, _ = viewer(client, ROOM)
+        fast, _ = viewer(client, ROOM)
+        open_ += [slow, fast]
+        for w in (slow, fast):
+            w.send_json({**VIEW, "codecs": ["vp09", "jpeg"]})
+        slow_frames: list = []
+
+        def drain_slow():   # reads, acknowledging nothing, until its socket closes
+            try:
+                while True:
+                    m = slow.receive()
+                    if m.get("bytes"):
+                        slow_frames.append(HEADER.unpack(m["bytes"][:HEADER.size]))
+                    elif m.get("type") == "websocket.close":
+                        return
+            except Exception:  # noqa: BLE001 - closed
+                return
+        box: dict = {}
+        threads = [threading.Thread(target=lambda: box.update(p=read(p, 40)[0])),
+                   threading.Thread(target=lambda: box.update(fast=read(fast, 30, timeout=30)[0]))]
+        for t in threads:
+            t.start()
+        stuck = threading.Thread(target=drain_slow, daemon=True)
+        stuck.start()
+        for t in threads:
+            t.join(40)
+        presenter_ids = {h[1] for h, _ in box["p"]}
+        fast_ids = {h[1] for h, _ in box["fast"]}
+        span = range(min(fast_ids), max(fast_ids) + 1)
+        assert len(fast_ids & presenter_ids) >= 0.9 * len([f for f in presenter_ids if f in span])
+        video = [h for h, _ in box["fast"] if h[11] == CODEC_IDS["vp09"]]
+        assert video
+        assert video[0][9] & FLAG_KEY
+        # the slow viewer: nothing acknowledged, so at most its window of frames came
+        assert 1 <= len(slow_frames) <= 2
+        # acknowledging again, it resumes on a keyframe
+        n = len(slow_frames)
+        for h in list(slow_frames):
+            slow.send_json({"type": "ack", "frame": h[1]})
+        t0 = time.monotonic()
+        while len(slow_frames) < n + 2 and time.monotonic() - t0 < 10:
+            read(p, 1)   # the presenter's stream goes on
+            for h in slow_frames[n:]:
+                slow.send_json({"type": "ack", "frame": h[1]})
+            n2 = len(slow_frames)
+        resumed = [h for h in slow_frames[n:] if h[11] == CODEC_IDS["vp09"]]
+        assert resumed
+        assert resumed[0][9] & FLAG_KEY
+        assert n2 > n
+    finally:
+        for w in reversed(open_):
+            w.__exit__(None, None, None)
