@@ -149,6 +149,7 @@ http {{
     uwsgi_temp_path {d}/uwsgi;
     scgi_temp_path {d}/scgi;
     upstream fogbank {{
+        hash $fogbank_route consistent;
 {servers}
     }}
     include {conf};

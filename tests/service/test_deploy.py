@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+import os
 import shutil
 import signal
 import subprocess
@@ -107,6 +108,55 @@ def test_stills_and_streams_through_nginx(topology):
     with urllib.request.urlopen(lb.url + "/") as r:
         assert "script-src 'self'" in r.headers["Content-Security-Policy"]
     assert len(run_async(ws_frames(lb.url, 3))) == 3
+
+
+async def live_through(url: str, rooms: list[str]) -> list[dict]:
+    """Each room: a presenter shares its session, then a viewer opens its live link, both
+    through `url`; the viewers' hellos (an error where a viewer reached a replica that
+    does not hold the session)."""
+    ws_url = url.replace("http", "ws", 1) + "/ws?"
+    presenters, out = [], []
+    try:
+        for room in rooms:
+            p = await websockets.connect(ws_url + f"v=1&time=3&room={room}")
+            presenters.append(p)
+            await p.recv(), await p.recv()
+            await p.send(json.dumps({"type": "share"}))
+            while True:
+                m = await asyncio.wait_for(p.recv(), 30)
+                if isinstance(m, str) and json.loads(m)["type"] == "audience":
+                    assert json.loads(m)["token"] == room
+                    break
+        for room in rooms:
+            async with websockets.connect(ws_url + f"live={room}") as v:
+                out.append(json.loads(await asyncio.wait_for(v.recv(), 30)))
+    finally:
+        for p in presenters:
+            await p.close()
+    return out
+
+
+def test_a_live_link_reaches_the_replica_that_holds_its_session_through_nginx(topology):
+    """Issue 34: nginx hashes /ws by the live token (`room` for the presenter, `live` for
+    its viewers): every viewer of 8 live sessions reaches its presenter's replica (were the
+    route lost, each would find the other replica's half of them missing: 1 in 256 to pass);
+    sockets without a token are still spread over both replicas."""
+    lb, replicas = topology
+    rooms = [f"deploy-test-room-{i:04d}-{os.getpid()}" for i in range(8)]
+    hellos = run_async(live_through(lb.url, rooms))
+    assert [h.get("type") for h in hellos] == ["hello"] * 8
+    assert all(h["live"]["role"] == "viewer" for h in hellos)
+
+    async def plain(n: int):
+        socks = [await websockets.connect(lb.url.replace("http", "ws", 1) + "/ws?v=1") for _ in range(n)]
+        try:
+            for ws in socks:
+                await ws.recv()
+            return [sessions_on(r) for r in replicas]
+        finally:
+            for ws in socks:
+                await ws.close()
+    assert min(run_async(plain(4))) >= 1
 
 
 # ---------------------------------------------------------------- long links
