@@ -417,7 +417,7 @@ def test_the_toolbar_fits_and_its_export_menu_opens(server, browser, w, h):
     page = ctx.new_page()
     page.goto(server.url + "/")
     wait_frames(page, 1)
-    ids = ["toggle-panel", "preset", "play", "speed", "time", "copy-link"]
+    ids = ["toggle-panel", "preset", "play", "speed", "time", "copy-link", "share-live"]
     for i in ids + ["more"]:
         box = page.locator(f"#{i}").bounding_box()
         assert box is not None and page.locator(f"#{i}").is_visible()

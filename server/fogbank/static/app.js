@@ -11,6 +11,7 @@ import { functionEditor } from "./editor.js";
 import { rayPlot } from "./rayplot.js";
 import { CameraInput } from "./camera.js";
 import { store, version, playing, simTime } from "./store.js";
+import { canSteer, liveToken, liveUi, newRoom } from "./live.js";
 
 const $ = (id) => document.getElementById(id);
 const canvas = $("view");
@@ -21,7 +22,11 @@ const [schema, presets] = await Promise.all([
 ]);
 
 // ------------------------------------------------------------------ stream
-const stream = new Stream(canvas, () => location.search.slice(1));
+// a viewer of a live session connects with its token alone (the look is the presenter's);
+// a page of its own connects with its look and a room (live.js)
+const stream = new Stream(canvas, () => (liveToken ? "" : location.search.slice(1)));
+stream.extra = liveToken ? `live=${liveToken}` : `room=${newRoom()}`;
+const steers = () => canSteer(store.get().live);
 window.fogbank = {
   stream, store,
   get params() { return store.get().params; },
@@ -54,7 +59,7 @@ function queueFlush() {
 }
 
 function setInteract(active) {
-  if (active === store.get().interacting) return;
+  if (active === store.get().interacting || (active && !steers())) return;
   store.set({ interacting: active });
   stream.send({ type: "interact", active });
 }
@@ -84,7 +89,7 @@ function remember(path, touchesCamera) {
   showHistory();
 }
 function restore(entry) {
-  if (!entry) return;
+  if (!entry || !steers()) return;
   const s = store.get();
   // the animation keeps its time; the camera goes back only with a change that moved it
   const { time, ...look } = entry.params;
@@ -153,6 +158,7 @@ async function addLayer(path, kind) {
 
 // ------------------------------------------------------------------ camera
 new CameraInput(canvas, () => store.get().params.camera, (patch) => {
+  if (!steers()) return;   // watching a live session: the camera is the presenter's
   patch = clampCamera(patch);
   store.update((s) => ({
     params: { ...s.params, camera: { ...s.params.camera, ...patch } },
@@ -298,6 +304,7 @@ function showConfirmed(c) {
 // The address bar follows the confirmed look, with the framing when it is the link's;
 // compact (links.js) when the readable query is long, so that it can be copied as it is.
 async function writeAddress(query) {
+  if (liveToken) return;   // a viewer's address stays the live link
   let q = query === "v=1" ? "" : query;
   const { framing } = store.get();
   if (framing) q += `${q ? "&" : ""}aspect=${Math.round(framing * 1000) / 1000}`;
@@ -368,7 +375,8 @@ $("time").addEventListener("change", () => { store.set({ scrubbing: false }); })
 // bar's time is that of the last seek or pause); compact (links.js) when the readable one
 // is long, readable otherwise (people read short ones).
 async function shareLink() {
-  const q = new URLSearchParams(location.search);
+  // (a viewer of a live session: the look it watches, not the live link)
+  const q = new URLSearchParams(liveToken ? store.get().confirmed?.query || "" : location.search);
   if (playing(store.get()) && store.get().lastFrame) q.set("time", String(Math.round(simTime(store.get()) * 1000) / 1000));
   q.set("aspect", String(Math.round(viewAspect() * 1000) / 1000));
   let text = q.toString().replace(/%2C/g, ",");
@@ -571,6 +579,9 @@ setInterval(() => {
   $("stat-refining").hidden = !(live && stream.lastFrame && !stream.lastFrame.full);
   $("stat-reduced").hidden = !(live && stream.lastFrame && stream.lastFrame.full && stream.lastFrame.reduced);
 }, 250);
+
+// ------------------------------------------------------------------ live sessions
+liveUi({ stream, store, $, toast, lookQuery: () => store.get().confirmed?.query || "" });
 
 if (innerWidth < 900) {   // phones and narrow windows start with the view, not the panel
   document.body.classList.add("panel-hidden");

@@ -46,6 +46,7 @@ export const store = createStore({
   probe: false,         // the plot panel follows the ray under the cursor
   link: null,           // the server's last measure of the link: {rate_bps, rtt_ms, stream_bps}
   framing: null,        // the view's aspect (width / height) from the link opened, or null: the window's
+  live: null,           // a live session's audience ({role, token, viewers, ids, control, you, ended}; live.js)
 });
 
 // Values derived from the state (no second copy is kept).

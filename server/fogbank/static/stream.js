@@ -48,6 +48,7 @@ export class Stream extends EventTarget {
     this.canvas = canvas;
     this.ctx2d = canvas.getContext("2d");
     this.queryFn = queryFn;          // the query to (re)connect with
+    this.extra = "";                 // beside it, never compacted (a live session's room or token)
     this.ws = null;
     this.retry = 0;
     this.frameTimes = [];
@@ -83,6 +84,7 @@ export class Stream extends EventTarget {
 
   open(q) {
     const proto = location.protocol === "https:" ? "wss:" : "ws:";
+    if (this.extra) q = q ? `${q}&${this.extra}` : this.extra;
     this.ws = new WebSocket(`${proto}//${location.host}/ws${q ? "?" + q : ""}`);
     this.ws.binaryType = "arraybuffer";
     this.ws.onopen = () => {

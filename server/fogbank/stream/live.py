@@ -284,7 +284,7 @@ async def presenter_message(client: "Client", parsed: Any, streamer: Any, now: f
         elif parsed.active:
             await audience.tell()
         elif audience is not None:
-            end_live(client, streamer, "the presenter stopped sharing; this live session has ended")
+            end_live(client, streamer, "the presenter stopped sharing")
             await client.send_json({"type": "audience", "role": "presenter", "token": None, "viewers": 0,
                                     "control": None, "you": None, "ids": []})
         return True

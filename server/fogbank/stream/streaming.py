@@ -607,7 +607,7 @@ async def websocket_endpoint(ws: WebSocket, streamer: Streamer, renderer_info: d
         pass
     finally:
         streamer.remove(client)
-        live.end_live(client, streamer, "the presenter left; this live session has ended")
+        live.end_live(client, streamer, "the presenter left")
         log.info("session closed", extra={"session": session.id, "frames": session.sent})
         if ws.client_state == WebSocketState.CONNECTED:
             try:
