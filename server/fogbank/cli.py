@@ -166,6 +166,12 @@ def cmd_bench_link(args) -> None:
     bench(args.before_tree, args.seconds, args.out)
 
 
+def cmd_bench_live(args) -> None:
+    """Viewers of one live session: their frame rates, the renders, the server's CPU."""
+    from fogbank.tools.audience import bench
+    bench(tuple(args.viewers), args.seconds, args.out)
+
+
 def cmd_bench(args) -> None:
     from fogbank.tools.bench import run
     run(args.out, quick=args.quick, only_targets=args.targets_only, before=args.before,
@@ -230,6 +236,12 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--seconds", type=float, default=8.0)
     p.add_argument("--out", default="docs/bench-link.md")
     p.set_defaults(fn=cmd_bench_link)
+
+    p = sub.add_parser("bench-live", help="viewers of one live session: their fps, the renders, the server's CPU")
+    p.add_argument("--viewers", type=int, nargs="+", default=[0, 1, 5, 10, 20])
+    p.add_argument("--seconds", type=float, default=8.0)
+    p.add_argument("--out", default="docs/bench-live.md")
+    p.set_defaults(fn=cmd_bench_live)
 
     p = sub.add_parser("bench-codecs", help="JPEG, VP8, VP9 and AV1 on fogbank's frames: bytes, ms, SSIM")
     p.add_argument("--frames", type=int, default=60)

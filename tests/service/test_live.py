@@ -231,3 +231,22 @@ def test_a_slow_viewer_skips_to_a_keyframe_without_slowing_the_others(client):
     finally:
         for w in reversed(open_):
             w.__exit__(None, None, None)
+
+
+def test_twenty_viewers_get_the_presenters_frames_from_one_render_each():
+    """Issue 34's target: 20 viewers of one live session on one worker (a real server
+    process; clients as tools/audience.py, each acknowledging every frame): each viewer
+    gets at least 90% of the presenter's frame rate, and the worker renders once per
+    presenter frame (the server's own count of renders), not once per viewer."""
+    from servers import Server, run_async
+
+    from fogbank.tools.audience import audience
+    srv = Server(env={"FOGBANK_WORKERS": "1"}).start()
+    try:
+        run_async(audience(srv.url, 0, 1.0, settle_s=2.0))   # the look's programs compiled
+        r = run_async(audience(srv.url, 20, 4.0, pid=srv.proc.pid))
+    finally:
+        srv.stop()
+    assert r["presenter_fps"] >= 5
+    assert r["viewer_fps_min"] >= 0.9 * r["presenter_fps"]
+    assert 0.9 <= r["renders_a_frame"] <= 1.1

@@ -53,6 +53,9 @@ ENDED_CLOSE = 4410   # the live session ended (the presenter left or stopped sha
 NO_SUCH_CLOSE = 4404   # no live session has this token (here)
 TOKEN = re.compile(r"[A-Za-z0-9_-]{16,64}")
 KEY_EVERY_S = 1.0    # a viewer that skipped video frames waits for a keyframe asked at most this often
+# a viewer is told who watches at most this often (when a class of N leaves at once, each
+# of them would otherwise be sent up to N messages)
+AUDIENCE_EVERY_S = 0.25
 MAX_QUEUED = 64      # texts a viewer may leave unread (its errors, mostly) before it is closed
 
 
@@ -84,6 +87,7 @@ class Viewer(Peer):
         self.frames = 0    # frames sent to it
         self.skipped = 0   # frames it did not get (its window full, or waiting for a keyframe)
         self.audience_due = False   # an "audience" message is owed (built when it goes)
+        self.audience_told = -math.inf   # when it was last sent one (loop time)
         self._out: deque[tuple[str, Any]] = deque()
         self._wake = asyncio.Event()
         self._close: tuple[int, str] | None = None
@@ -121,6 +125,7 @@ class Viewer(Peer):
         self._task = asyncio.get_running_loop().create_task(self._run(audience), name=f"fogbank-viewer-{self.id}")
 
     async def _run(self, audience: "Audience") -> None:
+        loop = asyncio.get_running_loop()
         try:
             while True:
                 await self._wake.wait()
@@ -130,7 +135,12 @@ class Viewer(Peer):
                         kind, data = self._out.popleft()
                         await (self.ws.send_text(data) if kind == "text" else self.ws.send_bytes(data))
                     elif self.audience_due:
+                        wait = self.audience_told + AUDIENCE_EVERY_S - loop.time()
+                        if wait > 0:   # again once it is due
+                            loop.call_later(wait, self._wake.set)
+                            break
                         self.audience_due = False
+                        self.audience_told = loop.time()
                         await self.ws.send_text(json.dumps(audience.message(self)))
                     else:
                         break

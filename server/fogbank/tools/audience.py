@@ -1,0 +1,149 @@
+"""Viewers of one live session (issue 34): a presenter that shares its session and N
+viewers of its live link, every frame acknowledged as it arrives (as the page does), over
+loopback. Measures each viewer's frames against the presenter's, the renders the worker
+made (the server's own count, /metrics) against the presenter's frames, and the server's
+CPU: its web process (which sends every viewer's frames) and its render workers.
+`fogbank bench-live` writes docs/bench-live.md."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import os
+import secrets
+import struct
+import time
+import urllib.request
+
+import websockets
+
+from fogbank.tools.link import run_in_thread
+from fogbank.workers import proctree
+
+TICK = os.sysconf("SC_CLK_TCK")
+
+
+def cpu_s(pid: int) -> float:
+    """CPU seconds (user and system) that process `pid` has used."""
+    try:
+        with open(f"/proc/{pid}/stat") as fh:
+            fields = fh.read().rsplit(")", 1)[1].split()
+    except OSError:
+        return 0.0
+    return (int(fields[11]) + int(fields[12])) / TICK
+
+
+def renders(url: str) -> float:
+    """Frames the server's workers rendered, by its own count (fogbank_render_ms_count)."""
+    with urllib.request.urlopen(url + "/metrics", timeout=10) as r:
+        for line in r.read().decode().splitlines():
+            if line.startswith("fogbank_render_ms_count"):
+                return float(line.split()[-1])
+    return 0.0
+
+
+async def _reader(ws, counts: list, key: int, t0: float, t1: float) -> None:
+    """Acknowledge every frame; count those that arrive between t0 and t1."""
+    while True:
+        left = t1 - time.monotonic()
+        if left <= 0:
+            return
+        try:
+            m = await asyncio.wait_for(ws.recv(), left)
+        except (asyncio.TimeoutError, websockets.ConnectionClosed):
+            return
+        if isinstance(m, bytes):
+            await ws.send(json.dumps({"type": "ack", "frame": struct.unpack_from("<I", m, 4)[0]}))
+            if time.monotonic() >= t0:
+                counts[key] += 1
+        else:
+            msg = json.loads(m)
+            if msg.get("type") == "ping":
+                await ws.send(json.dumps({"type": "pong", "ping": msg["ping"]}))
+
+
+async def audience(url: str, viewers: int, seconds: float = 6.0, size=(640, 360), settle_s: float = 2.0,
+                   codecs=("vp09", "jpeg"), query: str = "v=1", pid: int | None = None) -> dict:
+    """One presenter and `viewers` viewers for `seconds` (after `settle_s`): frames a
+    second of the presenter and of each viewer, renders a presenter frame, and (with the
+    server's `pid`) its CPU in cores: the web process and its render workers."""
+    ws_url = url.replace("http", "ws", 1) + "/ws?"
+    room = secrets.token_urlsafe(16)
+    view = {"type": "view", "width": size[0], "height": size[1], "fps": 30, "codecs": list(codecs)}
+    # (max_queue None: a client that stops reading at the end must still see its close
+    # handshake through the messages that came meanwhile; with 16, the last viewers' closes
+    # each waited out their 10 s timeout)
+    async with websockets.connect(ws_url + f"{query}&room={room}", max_size=2**24, max_queue=None) as p:
+        await p.recv(), await p.recv()
+        await p.send(json.dumps(view))
+        await p.send(json.dumps({"type": "share"}))
+        socks = []
+        try:
+            for _ in range(viewers):
+                v = await websockets.connect(ws_url + f"live={room}", max_size=2**24, max_queue=None)
+                socks.append(v)
+                await v.send(json.dumps(view))
+            counts = [0] * (viewers + 1)
+            t0 = time.monotonic() + settle_s
+            t1 = t0 + seconds
+            readers = [asyncio.ensure_future(_reader(ws, counts, i, t0, t1)) for i, ws in enumerate([p, *socks])]
+            await asyncio.sleep(max(0.0, t0 - time.monotonic()))
+            r0 = renders(url)
+            workers = proctree.descendants(pid) if pid else []
+            c0 = (cpu_s(pid), sum(cpu_s(w) for w in workers)) if pid else (0.0, 0.0)
+            me0 = time.process_time()
+            await asyncio.gather(*readers)
+            me1 = time.process_time()
+            c1 = (cpu_s(pid), sum(cpu_s(w) for w in workers)) if pid else (0.0, 0.0)
+            r1 = renders(url)
+        finally:
+            await asyncio.gather(*(v.close() for v in socks))
+    fps = [c / seconds for c in counts]
+    return {"viewers": viewers, "presenter_fps": round(fps[0], 2),
+            "viewer_fps_min": round(min(fps[1:]), 2) if viewers else None,
+            "viewer_fps_mean": round(sum(fps[1:]) / viewers, 2) if viewers else None,
+            "renders_a_frame": round((r1 - r0) / max(1, counts[0]), 3),
+            "web_cores": round((c1[0] - c0[0]) / seconds, 3), "worker_cores": round((c1[1] - c0[1]) / seconds, 3),
+            "client_cores": round((me1 - me0) / seconds, 3)}
+
+
+def bench(viewers=(0, 1, 5, 10, 20), seconds: float = 8.0, out: str | None = None) -> list[dict]:
+    """`audience` with each number of viewers, on one server of this code (one worker)."""
+    from fogbank.tools.child import ChildServer
+    srv = ChildServer(env={"FOGBANK_WORKERS": "1"})
+    rows = []
+    try:
+        run_in_thread(audience(srv.url, 0, 2.0, settle_s=2.0))   # warm: the look's programs compiled
+        for n in viewers:
+            r = run_in_thread(audience(srv.url, n, seconds, pid=srv.proc.pid))
+            print(f"  {n:3d} viewers: {r}", flush=True)
+            rows.append(r)
+    finally:
+        srv.stop()
+    if out:
+        base = rows[0]
+        lines = ["# fogbank benchmark: viewers of one live session (issue 34)", "",
+                 f"`fogbank bench-live --seconds {seconds:g}` on {os.cpu_count()} cores, one render worker. A presenter "
+                 "streams the default look with time running at 640x360 (VP9, as the page asks) and shares it; N "
+                 "viewers open its live link. Every client acknowledges each frame as it arrives and runs in the "
+                 "benchmark's own process, on the same machine. Renders a frame: the server's count of renders "
+                 "(/metrics) over the presenter's frames. CPU: cores used by the web process (it sends every "
+                 "viewer's frames) and by the render workers; the clients' (this benchmark's process, which shares "
+                 "the 2 cores) beside them.", "",
+                 "| viewers | presenter fps | viewer fps, min / mean | least viewer / presenter | renders a presenter frame "
+                 "| web process, cores | render workers, cores | the clients, cores |", "|---|---|---|---|---|---|---|---|"]
+        for r in rows:
+            ratio = f"{r['viewer_fps_min'] / r['presenter_fps']:.2f}" if r["viewers"] and r["presenter_fps"] else "-"
+            vf = f"{r['viewer_fps_min']} / {r['viewer_fps_mean']}" if r["viewers"] else "-"
+            lines.append(f"| {r['viewers']} | {r['presenter_fps']} | {vf} | {ratio} | {r['renders_a_frame']} | "
+                         f"{r['web_cores']} | {r['worker_cores']} | {r['client_cores']} |")
+        last = rows[-1]
+        if last["viewers"]:
+            per = (last["web_cores"] - base["web_cores"]) / last["viewers"]
+            per_frame = per / max(0.01, last["presenter_fps"]) * 1000
+            lines += ["", f"Web-process CPU per added viewer: {per * 100:.2f}% of a core "
+                          f"({per_frame:.2f} ms a presenter frame), from {base['viewers']} to {last['viewers']} "
+                          "viewers."]
+        with open(out, "w") as fh:
+            fh.write("\n".join(lines) + "\n")
+    return rows
