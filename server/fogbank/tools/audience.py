@@ -107,6 +107,28 @@ async def audience(url: str, viewers: int, seconds: float = 6.0, size=(640, 360)
             "client_cores": round((me1 - me0) / seconds, 3)}
 
 
+async def separate(url: str, sessions: int, seconds: float = 6.0, size=(640, 360), settle_s: float = 2.0,
+                   codecs=("vp09", "jpeg"), query: str = "v=1") -> dict:
+    """What watching cost before live sessions: `sessions` sessions of the same look, each
+    its own render and encode; frames a second, the least and the mean."""
+    ws_url = url.replace("http", "ws", 1) + "/ws?" + query
+    view = {"type": "view", "width": size[0], "height": size[1], "fps": 30, "codecs": list(codecs)}
+    socks = []
+    try:
+        for _ in range(sessions):
+            ws = await websockets.connect(ws_url, max_size=2**24, max_queue=None)
+            socks.append(ws)
+            await ws.recv(), await ws.recv()
+            await ws.send(json.dumps(view))
+        counts = [0] * sessions
+        t0 = time.monotonic() + settle_s
+        await asyncio.gather(*(_reader(ws, counts, i, t0, t0 + seconds) for i, ws in enumerate(socks)))
+    finally:
+        await asyncio.gather(*(ws.close() for ws in socks))
+    fps = [c / seconds for c in counts]
+    return {"sessions": sessions, "fps_min": round(min(fps), 2), "fps_mean": round(sum(fps) / sessions, 2)}
+
+
 def bench(viewers=(0, 1, 5, 10, 20), seconds: float = 8.0, out: str | None = None) -> list[dict]:
     """`audience` with each number of viewers, on one server of this code (one worker)."""
     from fogbank.tools.child import ChildServer
@@ -118,6 +140,8 @@ def bench(viewers=(0, 1, 5, 10, 20), seconds: float = 8.0, out: str | None = Non
             r = run_in_thread(audience(srv.url, n, seconds, pid=srv.proc.pid))
             print(f"  {n:3d} viewers: {r}", flush=True)
             rows.append(r)
+        apart = run_in_thread(separate(srv.url, viewers[-1] + 1, seconds))
+        print(f"  {apart}", flush=True)
     finally:
         srv.stop()
     if out:
@@ -144,6 +168,9 @@ def bench(viewers=(0, 1, 5, 10, 20), seconds: float = 8.0, out: str | None = Non
             lines += ["", f"Web-process CPU per added viewer: {per * 100:.2f}% of a core "
                           f"({per_frame:.2f} ms a presenter frame), from {base['viewers']} to {last['viewers']} "
                           "viewers."]
+        lines += ["", f"Before live sessions, each watcher had a session of its own: {apart['sessions']} sessions of the "
+                      f"same look on the same worker got {apart['fps_min']} to {apart['fps_mean']} frames a second "
+                      "(least, mean), each frame its own render and encode."]
         with open(out, "w") as fh:
             fh.write("\n".join(lines) + "\n")
     return rows
