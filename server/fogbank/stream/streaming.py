@@ -163,6 +163,8 @@ class Streamer:
         after `silent_yield_s`, or one paused (time stopped, no drag) and quiet after
         `yield_after_s`. It costs a socket, not a render slot."""
         cfg = self.settings
+        if c.audience is not None and c.audience.viewers:   # watched: a class listening to a paused look
+            return None
         if not c.spoke:
             quiet = now - c.connected
             return quiet if quiet >= cfg.silent_yield_s else None
@@ -451,11 +453,11 @@ class Streamer:
             await asyncio.sleep(min(1.0, cfg.idle_timeout_s / 4, cfg.ack_timeout_s / 4))
             now = self.clock()
             for c in list(self.clients.values()):
-                for v in list(c.audience.viewers.values()) if c.audience else []:
-                    if now - v.last_message > cfg.idle_timeout_s:
-                        v.close(IDLE_CLOSE, f"idle: no message for {cfg.idle_timeout_s:g} s")
+                # a session with viewers is not idle while they watch (a class listening to
+                # its teacher over a paused look sends nothing); its viewers go with it
+                watched = c.audience is not None and bool(c.audience.viewers)
                 reason = None
-                if now - c.last_message > cfg.idle_timeout_s:
+                if now - c.last_message > cfg.idle_timeout_s and not watched:
                     reason = f"idle: no message for {cfg.idle_timeout_s:g} s"
                 elif c.unacked_since is not None and now - c.unacked_since > cfg.ack_timeout_s:
                     reason = f"frames unacknowledged for {cfg.ack_timeout_s:g} s"
