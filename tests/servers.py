@@ -149,7 +149,7 @@ http {{
     uwsgi_temp_path {d}/uwsgi;
     scgi_temp_path {d}/scgi;
     upstream fogbank {{
-        hash $fogbank_route consistent;
+        hash $fogbank_route;
 {servers}
     }}
     include {conf};

@@ -115,7 +115,7 @@ async def live_through(url: str, rooms: list[str]) -> list[dict]:
     through `url`; the viewers' hellos (an error where a viewer reached a replica that
     does not hold the session)."""
     ws_url = url.replace("http", "ws", 1) + "/ws?"
-    presenters, out = [], []
+    presenters, out, tokens = [], [], []
     try:
         for room in rooms:
             p = await websockets.connect(ws_url + f"v=1&time=3&room={room}")
@@ -125,10 +125,11 @@ async def live_through(url: str, rooms: list[str]) -> list[dict]:
             while True:
                 m = await asyncio.wait_for(p.recv(), 30)
                 if isinstance(m, str) and json.loads(m)["type"] == "audience":
-                    assert json.loads(m)["token"] == room
+                    tokens.append(json.loads(m)["token"])
+                    assert tokens[-1].startswith(room + ".")
                     break
-        for room in rooms:
-            async with websockets.connect(ws_url + f"live={room}") as v:
+        for token in tokens:
+            async with websockets.connect(ws_url + f"live={token}") as v:
                 out.append(json.loads(await asyncio.wait_for(v.recv(), 30)))
     finally:
         for p in presenters:

@@ -66,12 +66,15 @@ def viewer(client, token):
     return ws, hello["live"]["id"]
 
 
-def test_a_shared_session_takes_the_room_as_its_token_and_viewers_get_its_own_frames(client):
+def test_a_shared_session_is_reached_by_its_room_and_viewers_get_its_own_frames(client):
     p = presenter(client)
     try:
         aud = share(p)
-        assert (aud["role"], aud["token"], aud["viewers"], aud["control"]) == ("presenter", ROOM, 0, None)
-        v, vid = viewer(client, ROOM)
+        assert (aud["role"], aud["viewers"], aud["control"]) == ("presenter", 0, None)
+        # the room, and a random part that only the server makes
+        assert aud["token"].startswith(ROOM + ".")
+        assert len(aud["token"]) == len(ROOM) + 17
+        v, vid = viewer(client, aud["token"])
         try:
             state = v.receive_json()
             assert state["type"] == "state"
@@ -100,8 +103,8 @@ def test_a_shared_session_takes_the_room_as_its_token_and_viewers_get_its_own_fr
 def test_control_is_handed_to_a_viewer_and_back(client):
     p = presenter(client, "time=3&play=0")
     try:
-        share(p)
-        v, vid = viewer(client, ROOM)
+        token = share(p)["token"]
+        v, vid = viewer(client, token)
         try:
             read(p, until=lambda m: m["type"] == "audience" and m["viewers"] == 1)
             # a viewer without control: its change is refused, the look unchanged
@@ -138,8 +141,8 @@ def test_control_is_handed_to_a_viewer_and_back(client):
 
 def test_a_presenter_who_leaves_ends_the_session_for_its_viewers(client):
     p = presenter(client)
-    share(p)
-    v, _ = viewer(client, ROOM)
+    token = share(p)["token"]
+    v, _ = viewer(client, token)
     try:
         read(v, 2)
         p.__exit__(None, None, None)
@@ -147,7 +150,7 @@ def test_a_presenter_who_leaves_ends_the_session_for_its_viewers(client):
             read(v, until=lambda m: False, timeout=10)
         assert exc.value.code == 4410
         # and the link now leads nowhere, said so
-        w = client.websocket_connect(f"/ws?live={ROOM}")
+        w = client.websocket_connect(f"/ws?live={token}")
         with w:
             err = w.receive_json()
             assert err["loc"] == ["live"]
@@ -155,6 +158,15 @@ def test_a_presenter_who_leaves_ends_the_session_for_its_viewers(client):
             with pytest.raises(WebSocketDisconnect) as exc:
                 w.receive_json()
             assert exc.value.code == 4404
+        # a viewer who saw the link cannot claim it by connecting with its room: a new
+        # share has a new token, and the old link still leads nowhere
+        q = presenter(client)
+        try:
+            again = share(q)["token"]
+            assert again.startswith(ROOM + ".")
+            assert again != token
+        finally:
+            q.__exit__(None, None, None)
     finally:
         v.__exit__(None, None, None)
 
@@ -177,10 +189,10 @@ def test_a_slow_viewer_skips_to_a_keyframe_without_slowing_the_others(client):
     open_ = [p]
     try:
         p.send_json({**VIEW, "codecs": ["vp09", "jpeg"]})
-        share(p)
+        token = share(p)["token"]
         read(p, 6)
-        slow, _ = viewer(client, ROOM)
-        fast, _ = viewer(client, ROOM)
+        slow, _ = viewer(client, token)
+        fast, _ = viewer(client, token)
         open_ += [slow, fast]
         for w in (slow, fast):
             w.send_json({**VIEW, "codecs": ["vp09", "jpeg"]})

@@ -40,3 +40,62 @@ def test_a_watched_session_never_yields_its_place():
     assert st.idle_for(c, later) is None
     c.audience.viewers.clear()
     assert st.idle_for(c, later) == later
+
+
+def _audience():
+    from types import SimpleNamespace
+
+    from fogbank.stream.live import Audience
+    from fogbank.stream.session import Session
+    presenter = SimpleNamespace(session=Session("p", now=0.0), closed=False)
+    return Audience(presenter, "abcdefghijklmnop1234.abcdefghijklmnop")
+
+
+def test_a_viewer_that_stops_reading_holds_two_frames_whatever_it_acknowledges():
+    """A viewer whose socket takes nothing (its writes block) and that acknowledges frames
+    it was never given (ack 2^32-1) still has at most two frames queued: the acks past its
+    last frame are ignored, and frames not yet written count against its window."""
+    import asyncio
+
+    from fogbank.stream.live import Viewer
+
+    class Stuck:   # a socket whose writes never finish
+        async def send_text(self, text):
+            await asyncio.Event().wait()
+
+        async def send_bytes(self, data):
+            await asyncio.Event().wait()
+
+    async def run():
+        aud = _audience()
+        v = Viewer("v1", aud.session, Stuck(), "127.0.0.1", 0.0)
+        v.start(aud)
+        aud.join(v)
+        for frame in range(1, 41):
+            await aud.fan_out(frame, "jpeg", False, b"x" * 50_000, None, 0.0)
+            v.ack(2**32 - 1)
+            v.ack(frame)
+            await asyncio.sleep(0)
+        queued = v.queued_frames
+        frames = v.frames
+        await v.stop()
+        return queued, frames
+    queued, frames = asyncio.run(run())
+    assert queued <= 2
+    assert frames <= 3   # the one being written, and two queued
+
+
+def test_handing_control_over_ends_the_drag_of_whoever_had_it():
+    """Control handed over, given back or lost with its viewer mid-drag: the session is no
+    longer held in its previews (the new controller never sent the drag's end)."""
+    from types import SimpleNamespace
+    aud = _audience()
+    s = aud.session
+    aud.viewers["v1"] = SimpleNamespace(id="v1", codecs=("jpeg",))
+    s.interacting = True
+    aud.hand("v1")
+    assert s.interacting is False
+    s.interacting = True   # v1 drags, then leaves
+    aud.leave(aud.viewers["v1"])
+    assert aud.control is None
+    assert s.interacting is False

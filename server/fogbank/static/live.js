@@ -8,7 +8,7 @@
 // the token of the live session this page watches (null: the page has a session of its own)
 export const liveToken = (() => {
   const t = new URLSearchParams(location.search).get("live");
-  return t && /^[A-Za-z0-9_-]{16,64}$/.test(t) ? t : null;
+  return t && /^[A-Za-z0-9_-]{16,64}(\.[A-Za-z0-9_-]{16})?$/.test(t) ? t : null;
 })();
 
 // a random room: 16 bytes, URL-safe base64 (22 characters)
@@ -34,8 +34,11 @@ export function liveUi({ stream, store, $, toast, lookQuery }) {
   stream.addEventListener("hello", (e) => {
     if (e.detail.live) store.set({ live: { role: "viewer", you: e.detail.live.id, viewers: 1, control: null } });
   });
+  // a page of its own reconnected: a new session, shared by no one (its live link ended)
+  stream.addEventListener("open", () => { if (!liveToken) store.set({ live: null }); });
   stream.addEventListener("audience", (e) => {
     const { type, ...live } = e.detail;
+    if (store.get().live?.ended) return;   // (one sent as the session ended)
     store.set({ live: live.token ? live : null });
     if (live.token && live.role === "presenter" && copyWhenShared) {
       copyWhenShared = false;

@@ -51,7 +51,12 @@ log = logging.getLogger("fogbank.stream")
 
 ENDED_CLOSE = 4410   # the live session ended (the presenter left or stopped sharing)
 NO_SUCH_CLOSE = 4404   # no live session has this token (here)
-TOKEN = re.compile(r"[A-Za-z0-9_-]{16,64}")
+ROOM = re.compile(r"[A-Za-z0-9_-]{16,64}")
+# a live link's token: the presenter's room (what the load balancer routes by) and a random
+# part that only the server makes, so that no one who saw a link can claim it by
+# connecting with its room once the presenter is gone
+TOKEN = re.compile(r"[A-Za-z0-9_-]{16,64}(\.[A-Za-z0-9_-]{16})?")
+FORCE_CLOSE_S = 5.0   # a viewer's socket that does not take its close within this is dropped
 KEY_EVERY_S = 1.0    # a viewer that skipped video frames waits for a keyframe asked at most this often
 # a viewer is told who watches at most this often (when a class of N leaves at once, each
 # of them would otherwise be sent up to N messages)
@@ -66,12 +71,15 @@ def split_live(query: str) -> tuple[str, str | None, str | None]:
     look, room, live = [], None, None
     for part in query.split("&") if query else []:
         if part.startswith("room="):
-            room = part[5:] if TOKEN.fullmatch(part[5:]) else None
+            room = part[5:] if ROOM.fullmatch(part[5:]) else None
         elif part.startswith("live="):
             live = part[5:]
         elif part:
             look.append(part)
     return "&".join(look), room, live
+
+
+_DROPPING: set = set()   # viewers' forced closes under way (the loop keeps weak references)
 
 
 class Viewer(Peer):
@@ -85,6 +93,8 @@ class Viewer(Peer):
         self.codecs: tuple[str, ...] = ("jpeg",)   # what its page decodes (its view message)
         self.last_message = now
         self.frames = 0    # frames sent to it
+        self.last_frame = 0   # the id of the last frame given it
+        self.queued_frames = 0   # frames given it and not yet written to its socket
         self.skipped = 0   # frames it did not get (its window full, or waiting for a keyframe)
         self.audience_due = False   # an "audience" message is owed (built when it goes)
         self.audience_told = -math.inf   # when it was last sent one (loop time)
@@ -97,8 +107,17 @@ class Viewer(Peer):
         return len(self.inflight)
 
     def ack(self, frame: int) -> None:
+        """Frames up to `frame` arrived (an ack past the last frame given it is ignored, as
+        the session's own are: it would free a window that its socket still holds)."""
+        if frame > self.last_frame:
+            return
         for f in [f for f in self.inflight if f <= frame]:
             del self.inflight[f]
+
+    def room(self) -> bool:
+        """Room for a frame: fewer than MAX_IN_FLIGHT unacknowledged, and as few waiting
+        to be written (a socket that does not drain holds them, whatever is acknowledged)."""
+        return self.unacked() < MAX_IN_FLIGHT and self.queued_frames < MAX_IN_FLIGHT
 
     async def send_json(self, msg: dict[str, Any]) -> None:
         self._put("text", json.dumps(msg))
@@ -113,13 +132,30 @@ class Viewer(Peer):
             self.close(1008, "messages left unread")
             return
         self._out.append((kind, data))
+        if kind == "bytes":
+            self.queued_frames += 1
         self._wake.set()
 
     def close(self, code: int, reason: str) -> None:
-        """Close after what is queued."""
+        """Close after what is queued; a socket that does not take it within FORCE_CLOSE_S
+        (its reader stopped, the writes block) is dropped."""
         if self._close is None:
             self._close = (code, reason)
             self._wake.set()
+            asyncio.get_running_loop().call_later(FORCE_CLOSE_S, self._force)
+
+    def _force(self) -> None:
+        if self._task is not None and not self._task.done():
+            self._task.cancel()
+            task = asyncio.get_running_loop().create_task(self._drop())
+            _DROPPING.add(task)
+            task.add_done_callback(_DROPPING.discard)
+
+    async def _drop(self) -> None:
+        try:
+            await asyncio.wait_for(self.ws.close(code=self._close[0], reason=self._close[1]), 1.0)
+        except Exception:  # noqa: BLE001 - gone, or its socket blocked: its endpoint ends on disconnect
+            pass
 
     def start(self, audience: "Audience") -> None:
         self._task = asyncio.get_running_loop().create_task(self._run(audience), name=f"fogbank-viewer-{self.id}")
@@ -133,8 +169,12 @@ class Viewer(Peer):
                 while True:
                     if self._out:   # in order; then the audience as it is now
                         kind, data = self._out.popleft()
-                        await (self.ws.send_text(data) if kind == "text" else self.ws.send_bytes(data))
-                    elif self.audience_due:
+                        if kind == "text":
+                            await self.ws.send_text(data)
+                        else:
+                            await self.ws.send_bytes(data)
+                            self.queued_frames -= 1
+                    elif self.audience_due and not self._close:
                         wait = self.audience_told + AUDIENCE_EVERY_S - loop.time()
                         if wait > 0:   # again once it is due
                             loop.call_later(wait, self._wake.set)
@@ -223,7 +263,8 @@ class Audience:
         self._codecs()
         s = self.session
         s.need_key = True   # its first video frame stands alone
-        s.redo()            # a paused look is drawn again for it
+        if not s.playing:
+            s.redo()        # a paused look is drawn again for it
         metrics.VIEWERS.inc()
 
     def leave(self, viewer: Viewer) -> bool:
@@ -231,9 +272,16 @@ class Audience:
             return False
         metrics.VIEWERS.dec()
         if self.control == viewer.id:
-            self.control = None
+            self.hand(None)
         self._codecs()
         return True
+
+    def hand(self, to: str | None) -> None:
+        """Control to viewer `to` (None: the presenter). A drag of whoever had it ends with it
+        (else the look stayed in its previews until the next one in control dragged)."""
+        if to != self.control:
+            self.control = to
+            self.session.interacting = False
 
     def set_codecs(self, viewer: Viewer, codecs: tuple[str, ...]) -> None:
         if codecs != viewer.codecs:
@@ -249,19 +297,21 @@ class Audience:
         for v in list(self.viewers.values()):
             if v.closed:
                 continue
-            if v.unacked() >= MAX_IN_FLIGHT or (video and (v.waiting_key and not key or codec not in v.codecs)):
+            if not v.room() or (video and (v.waiting_key and not key or codec not in v.codecs)):
                 v.skipped += 1
                 v.waiting_key = v.waiting_key or video   # its decoder lost the chain
                 continue
             if video:
                 v.waiting_key = False
             v.inflight[frame] = now
+            v.last_frame = frame
             v.frames += 1
             await v.pay(now, force=True)   # the look's reply before its frame
             if stats:
                 await v.send_json(stats)
             await v.send_bytes(data)
-        if video and now - self.key_asked >= KEY_EVERY_S and any(v.waiting_key for v in self.viewers.values()):
+        if video and now - self.key_asked >= KEY_EVERY_S and any(v.waiting_key and v.room() and codec in v.codecs
+                                                                  for v in self.viewers.values()):
             self.key_asked = now
             self.session.need_key = True
 
@@ -273,12 +323,10 @@ class Audience:
             v.close(ENDED_CLOSE, reason[:120])
 
 
-def new_token(streamer: Any, room: str | None) -> str:
+def new_token(room: str | None) -> str:
     """The live link's token: the room the presenter's page connected with (its load
-    balancer routed it by that), unless another live session holds it."""
-    if room and room not in streamer.live:
-        return room
-    return secrets.token_urlsafe(16)
+    balancer routed it by that) and a random part (12 bytes); with no room, random."""
+    return f"{room}.{secrets.token_urlsafe(12)}" if room else secrets.token_urlsafe(16)
 
 
 async def presenter_message(client: "Client", parsed: Any, streamer: Any, now: float) -> bool:
@@ -287,7 +335,7 @@ async def presenter_message(client: "Client", parsed: Any, streamer: Any, now: f
     audience = client.audience
     if isinstance(parsed, ShareMsg):
         if parsed.active and audience is None:
-            client.audience = audience = Audience(client, new_token(streamer, client.room))
+            client.audience = audience = Audience(client, new_token(client.room))
             streamer.live[audience.token] = client
             log.info("session shared live", extra={"session": client.session.id})
             await audience.tell()
@@ -307,7 +355,7 @@ async def presenter_message(client: "Client", parsed: Any, streamer: Any, now: f
             await client.send_json({"type": "error", "loc": ["message", "to"],
                                     "msg": f"no viewer {parsed.to!r} watches this session (its viewers: {ids})"})
         else:
-            audience.control = parsed.to
+            audience.hand(parsed.to)
             await audience.tell()
         return True
     if audience is not None and not audience.controls(client) and isinstance(parsed, STEERING):
@@ -339,7 +387,10 @@ async def viewer_endpoint(ws: WebSocket, streamer: Any, token: str, addr: str, r
     presenter = streamer.live.get(token) if TOKEN.fullmatch(token) else None
     audience = presenter.audience if presenter is not None else None
     refusal = None
-    if audience is None:
+    if not TOKEN.fullmatch(token):
+        refusal = (NO_SUCH_CLOSE, "this is not a live link: its token (live=) is the presenter's room (16-64 of "
+                   "A-Z a-z 0-9 - _), a dot and 16 more; ask the presenter for the link again")
+    elif audience is None:
         refusal = (NO_SUCH_CLOSE, "no live session has this link here: it has ended, or the link is not whole "
                    "(ask the presenter for it again)")
     elif len(audience.viewers) >= cfg.max_viewers:
@@ -407,7 +458,7 @@ async def viewer_endpoint(ws: WebSocket, streamer: Any, token: str, addr: str, r
                                         "msg": "only the presenter shares a live session"})
             elif isinstance(parsed, ControlMsg):
                 if parsed.to is None and audience.control == viewer.id:   # handed back
-                    audience.control = None
+                    audience.hand(None)
                     await audience.tell()
                 else:
                     await viewer.send_json({"type": "error", "loc": ["message", "type"],

@@ -456,6 +456,14 @@ class Streamer:
                 # a session with viewers is not idle while they watch (a class listening to
                 # its teacher over a paused look sends nothing); its viewers go with it
                 watched = c.audience is not None and bool(c.audience.viewers)
+                for v in list(c.audience.viewers.values()) if c.audience else []:
+                    # a viewer that leaves its frames unacknowledged is let go, as a session is
+                    if v.inflight and now - min(v.inflight.values()) > cfg.ack_timeout_s:
+                        why = f"frames unacknowledged for {cfg.ack_timeout_s:g} s"
+                        log.info("viewer closed", extra={"session": c.session.id, "viewer": v.id, "reason": why})
+                        c.audience.leave(v)
+                        v.close(IDLE_CLOSE, why)
+                        await c.audience.tell()
                 reason = None
                 if now - c.last_message > cfg.idle_timeout_s and not watched:
                     reason = f"idle: no message for {cfg.idle_timeout_s:g} s"

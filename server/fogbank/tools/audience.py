@@ -77,10 +77,17 @@ async def audience(url: str, viewers: int, seconds: float = 6.0, size=(640, 360)
         await p.recv(), await p.recv()
         await p.send(json.dumps(view))
         await p.send(json.dumps({"type": "share"}))
+        token = None
+        while token is None:   # the live link's token, from the audience message
+            m = await asyncio.wait_for(p.recv(), 30)
+            if isinstance(m, bytes):
+                await p.send(json.dumps({"type": "ack", "frame": struct.unpack_from("<I", m, 4)[0]}))
+            elif json.loads(m).get("type") == "audience":
+                token = json.loads(m)["token"]
         socks = []
         try:
             for _ in range(viewers):
-                v = await websockets.connect(ws_url + f"live={room}", max_size=2**24, max_queue=None)
+                v = await websockets.connect(ws_url + f"live={token}", max_size=2**24, max_queue=None)
                 socks.append(v)
                 await v.send(json.dumps(view))
             counts = [0] * (viewers + 1)
