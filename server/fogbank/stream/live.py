@@ -39,7 +39,7 @@ from typing import TYPE_CHECKING, Any
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
 from fogbank.service import metrics
-from fogbank.stream.peer import LOOK_CHANGES, STEERING, Peer, apply_change
+from fogbank.stream.peer import LOOK_CHANGES, STEERING, TOO_LARGE, Peer, apply_change, next_message
 from fogbank.stream.protocol import (MAX_MESSAGE, PROTOCOL, AckMsg, ControlMsg, InteractMsg, PongMsg, ProtocolError,
                                      ShareMsg, ViewMsg, parse)
 from fogbank.stream.session import MAX_IN_FLIGHT, PLAY_BUDGET_MS, REFINE_BUDGET_MS, Session
@@ -419,14 +419,10 @@ async def viewer_endpoint(ws: WebSocket, streamer: Any, token: str, addr: str, r
     bucket = TokenBucket(cfg.messages_per_s, cfg.message_burst, now)
     try:
         while not viewer.closed:
-            msg = await ws.receive()
-            if msg["type"] == "websocket.disconnect":
-                break
-            data = msg.get("text")
+            data = await next_message(ws)
             if data is None:
-                data = msg.get("bytes") or b""
-            size = len(data.encode("utf-8")) if isinstance(data, str) else len(data)
-            if size > MAX_MESSAGE:
+                break
+            if data is TOO_LARGE:
                 viewer.close(1009, f"message over {MAX_MESSAGE} bytes")
                 break
             now = streamer.clock()

@@ -16,7 +16,7 @@ from typing import Any
 
 from starlette.websockets import WebSocket
 
-from fogbank.stream.protocol import (CameraMsg, InteractMsg, ParamsMsg, PlayMsg, QueryMsg, SeekMsg,
+from fogbank.stream.protocol import (MAX_MESSAGE, CameraMsg, InteractMsg, ParamsMsg, PlayMsg, QueryMsg, SeekMsg,
                                      SpeedMsg)
 from fogbank.stream.session import MAX_IN_FLIGHT, Session
 
@@ -91,3 +91,19 @@ async def apply_change(session: Session, msg: Any, by: Peer, others: list[Peer],
     await by.pay(now)
     for p in others:
         await p.pay(now)
+
+
+TOO_LARGE = object()   # next_message's answer for a message over MAX_MESSAGE
+
+
+async def next_message(ws: WebSocket) -> str | bytes | object | None:
+    """A socket's next message, text or bytes; None once the client has left, TOO_LARGE
+    for one over MAX_MESSAGE (the caller closes the socket with 1009)."""
+    msg = await ws.receive()
+    if msg["type"] == "websocket.disconnect":
+        return None
+    data = msg.get("text")
+    if data is None:
+        data = msg.get("bytes") or b""
+    size = len(data.encode("utf-8")) if isinstance(data, str) else len(data)
+    return TOO_LARGE if size > MAX_MESSAGE else data

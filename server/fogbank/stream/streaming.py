@@ -43,7 +43,7 @@ from fogbank.stream.protocol import (FLAG_FULL, FLAG_KEY, FLAG_PLAYING, FLAG_RED
 from fogbank.stream.link import PING_EVERY_S
 from fogbank.stream import live
 from fogbank.stream.live import Audience
-from fogbank.stream.peer import LOOK_CHANGE_TYPES, Peer, apply_change
+from fogbank.stream.peer import LOOK_CHANGE_TYPES, TOO_LARGE, Peer, apply_change, next_message
 from fogbank.stream.session import PLAY_BUDGET_MS, REFINE_BUDGET_MS, FrameJob, Session
 from fogbank.workers.supervisor import DeadlineExceeded, Slot, Supervisor, WorkerError
 
@@ -582,14 +582,10 @@ async def websocket_endpoint(ws: WebSocket, streamer: Streamer, renderer_info: d
     log.info("session opened", extra={"session": session.id, "query": query})
     try:
         while True:
-            msg = await ws.receive()
-            if msg["type"] == "websocket.disconnect":
-                break
-            data = msg.get("text")
+            data = await next_message(ws)
             if data is None:
-                data = msg.get("bytes") or b""
-            size = len(data.encode("utf-8")) if isinstance(data, str) else len(data)
-            if size > MAX_MESSAGE:
+                break
+            if data is TOO_LARGE:
                 await ws.close(code=1009, reason=f"message over {MAX_MESSAGE} bytes")
                 break
             client.last_message = streamer.clock()
