@@ -262,3 +262,48 @@ def test_twenty_viewers_get_the_presenters_frames_from_one_render_each():
     assert r["presenter_fps"] >= 5
     assert r["viewer_fps_min"] >= 0.9 * r["presenter_fps"]
     assert 0.9 <= r["renders_a_frame"] <= 1.1
+
+
+def test_a_viewer_that_leaves_its_frames_unacknowledged_is_let_go():
+    """A viewer that reads but never acknowledges holds its window: after ack_timeout_s
+    (2 s here) it is closed with 4408 and a reason, and the presenter is told it left."""
+    import asyncio
+
+    import websockets
+    from servers import Server, run_async
+    srv = Server(env={"FOGBANK_ACK_TIMEOUT_S": "2"}).start()
+
+    async def run():
+        base = srv.url.replace("http", "ws", 1) + "/ws?"
+        async with websockets.connect(base + f"v=1&time=3&room={ROOM}", max_queue=None) as p:
+            await p.recv(), await p.recv()
+            await p.send(json.dumps(VIEW))
+            await p.send(json.dumps({"type": "share"}))
+            token, seen, code = None, [], None
+            t0 = time.monotonic()
+            v = None
+            while time.monotonic() - t0 < 20:
+                m = await asyncio.wait_for(p.recv(), 10)
+                if isinstance(m, bytes):   # the presenter acknowledges everything
+                    await p.send(json.dumps({"type": "ack", "frame": HEADER.unpack(m[:HEADER.size])[1]}))
+                    continue
+                msg = json.loads(m)
+                if msg["type"] == "audience" and msg["token"] and token is None:
+                    token = msg["token"]
+                    v = await websockets.connect(base + f"live={token}", max_queue=None)
+                elif msg["type"] == "audience":
+                    seen.append(msg["viewers"])
+                    if seen[-1] == 0 and 1 in seen:
+                        break
+            try:   # the viewer, which read but acknowledged nothing, was closed
+                while True:
+                    await asyncio.wait_for(v.recv(), 5)
+            except websockets.ConnectionClosed as exc:
+                code = exc.rcvd.code if exc.rcvd else None
+            return seen, code
+    try:
+        seen, code = run_async(run())
+    finally:
+        srv.stop()
+    assert seen[-2:] == [1, 0]
+    assert code == 4408
