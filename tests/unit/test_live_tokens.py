@@ -68,7 +68,7 @@ def test_a_viewer_that_stops_reading_holds_two_frames_whatever_it_acknowledges()
 
     async def run():
         aud = _audience()
-        v = Viewer("v1", aud.session, Stuck(), "127.0.0.1", 0.0)
+        v = Viewer("v1", aud.session, Stuck(), "127.0.0.1")
         v.start(aud)
         aud.join(v)
         for frame in range(1, 41):

@@ -85,13 +85,12 @@ _DROPPING: set = set()   # viewers' forced closes under way (the loop keeps weak
 class Viewer(Peer):
     """A viewer's socket: its messages go out in order from its own task (`_run`)."""
 
-    def __init__(self, vid: str, session: Session, ws: WebSocket, addr: str, now: float):
+    def __init__(self, vid: str, session: Session, ws: WebSocket, addr: str):
         super().__init__(session, ws)
         self.id, self.addr = vid, addr
         self.inflight: dict[int, float] = {}   # frame id -> when sent, not yet acknowledged
         self.waiting_key = True   # video frames wait for a keyframe (a new viewer, or one that skipped)
         self.codecs: tuple[str, ...] = ("jpeg",)   # what its page decodes (its view message)
-        self.last_message = now
         self.frames = 0    # frames sent to it
         self.last_frame = 0   # the id of the last frame given it
         self.queued_frames = 0   # frames given it and not yet written to its socket
@@ -128,7 +127,7 @@ class Viewer(Peer):
     def _put(self, kind: str, data: Any) -> None:
         if self.closed or self._close:
             return
-        if kind == "text" and sum(k == "text" for k, _ in self._out) >= MAX_QUEUED:
+        if kind == "text" and len(self._out) - self.queued_frames >= MAX_QUEUED:
             self.close(1008, "messages left unread")
             return
         self._out.append((kind, data))
@@ -404,7 +403,7 @@ async def viewer_endpoint(ws: WebSocket, streamer: Any, token: str, addr: str, r
         return
     now = streamer.clock()
     session = presenter.session
-    viewer = Viewer(uuid.uuid4().hex[:8], session, ws, addr, now)
+    viewer = Viewer(uuid.uuid4().hex[:8], session, ws, addr)
     viewer.start(audience)
     await viewer.send_json({"type": "hello", "protocol": PROTOCOL, "session": session.id,
                             "renderer": renderer_info.get("renderer"), "max_message": MAX_MESSAGE,
@@ -426,7 +425,6 @@ async def viewer_endpoint(ws: WebSocket, streamer: Any, token: str, addr: str, r
                 viewer.close(1009, f"message over {MAX_MESSAGE} bytes")
                 break
             now = streamer.clock()
-            viewer.last_message = now
             if not bucket.take(now):
                 metrics.ERRORS.labels("rate").inc()
                 if bucket.should_notify():

@@ -38,11 +38,10 @@ from fogbank.workers import cost
 from fogbank.service import metrics
 
 from fogbank.workers import worker
-from fogbank.stream.protocol import (FLAG_FULL, FLAG_KEY, FLAG_PLAYING, FLAG_REDUCED, MAX_MESSAGE, PROTOCOL, HEADER, ProtocolError, QueryMsg, frame_header,
-                                     parse)
+from fogbank.stream.protocol import (FLAG_FULL, FLAG_KEY, FLAG_PLAYING, FLAG_REDUCED, MAX_MESSAGE, PROTOCOL, HEADER,
+                                     ProtocolError, QueryMsg, frame_header, parse)
 from fogbank.stream.link import PING_EVERY_S
 from fogbank.stream import live
-from fogbank.stream.live import Audience
 from fogbank.stream.peer import LOOK_CHANGE_TYPES, TOO_LARGE, Peer, apply_change, next_message
 from fogbank.stream.session import PLAY_BUDGET_MS, REFINE_BUDGET_MS, FrameJob, Session
 from fogbank.workers.supervisor import DeadlineExceeded, Slot, Supervisor, WorkerError
@@ -57,6 +56,8 @@ def _type_of(data: str | bytes) -> Any:
     except (ValueError, RecursionError, UnicodeDecodeError):
         return None
     return msg.get("type") if isinstance(msg, dict) else None
+
+
 LINK_EVERY_S = 1.0   # the link's estimate is sent at most this often (a "link" message)
 IDLE_CLOSE = 4408   # closed for inactivity (no messages, or frames left unacknowledged)
 SHARE_RECENT_S = 1.0   # a playing session that started a frame this recently shares its worker (Streamer.sharing)
@@ -115,7 +116,7 @@ class Client(Peer):
         self.connected = now
         self.link_told = -1e9   # when the page was last told the link's estimate
         self.room: str | None = None   # the token its live link would have (stream/live.py)
-        self.audience: Audience | None = None   # its viewers, while it is shared live
+        self.audience: live.Audience | None = None   # its viewers, while it is shared live
 
     def unacked(self) -> int:
         return self.session.sent - self.session.acked
@@ -383,13 +384,14 @@ class Streamer:
                             max(1.0 / s.view.fps, (render_ms + encode_ms) / 1000.0))
                 if job.codec == "jpeg":   # the JPEG sizes that FrameFit predicts from
                     s.fit.encoded(len(out["data"]), job.still.width * job.still.height, job.quality)
-                if out.get("stats"):   # a view that teaches: its numbers and legend first
-                    await client.send_json({"type": "view_stats", "frame": job.frame, **out["stats"]})
-                await client.send_bytes(header + out["data"])
+                # a view that teaches: its numbers and legend first
+                stats = {"type": "view_stats", "frame": job.frame, **out["stats"]} if out.get("stats") else None
+                packet = header + out["data"]
+                if stats:
+                    await client.send_json(stats)
+                await client.send_bytes(packet)
                 if client.audience is not None:   # the same bytes to its viewers (stream/live.py)
-                    stats = {"type": "view_stats", "frame": job.frame, **out["stats"]} if out.get("stats") else None
-                    await client.audience.fan_out(job.frame, job.codec, bool(out.get("key")),
-                                                  header + out["data"], stats, now)
+                    await client.audience.fan_out(job.frame, job.codec, bool(out.get("key")), packet, stats, now)
                 if client.unacked_since is None:
                     client.unacked_since = self.clock()
                 sent = True
