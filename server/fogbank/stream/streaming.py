@@ -93,6 +93,9 @@ FAIR_WAIT_S = 0.03
 # time, its frames take at least 1/5 of the worker while another session is always due
 # (at 2.5, the difference view beside a stream took enough to leave it 0.66 of its rate)
 FAIR_HOLD_FRAMES = 4.0
+# ... and only for a session whose frames take at most 1/this of its own: two looks of
+# like cost take turns by time, the worker never idle while one is due (see _hold_until)
+FAIR_HOLD_RATIO = 4.0
 
 
 def fair_charge(ms: float) -> float:
@@ -266,7 +269,7 @@ class Streamer:
         order.sort(key=lambda c: c.vtime)
         soonest = None
         waiting: set[int] = set()   # workers with a due session that its room holds back
-        holding: dict[int, float] = {}   # worker -> when a session that used less time is due (within FAIR_WAIT_S)
+        holding: dict[int, list] = {}   # worker -> (when due, last frame's ms) of sessions that used less time, due within FAIR_WAIT_S
         queued: list[Client] = []   # due sessions that may take a worker's queued place
         for c in order:
             due = c.session.next_due(now)
@@ -275,9 +278,9 @@ class Streamer:
             if due > now:
                 soonest = due if soonest is None else min(soonest, due)
                 if due - now <= FAIR_WAIT_S:   # the costly sessions after it on its worker wait for it
-                    holding[c.slot.index] = min(holding.get(c.slot.index, due), due)
+                    holding.setdefault(c.slot.index, []).append((due, c.session.last_ms))
                 continue
-            until = self._hold_until(c, holding.get(c.slot.index), now)
+            until = self._hold_until(c, holding.get(c.slot.index, ()), now)
             if until is not None:
                 soonest = until if soonest is None else min(soonest, until)
                 continue
@@ -294,16 +297,25 @@ class Streamer:
         return None, soonest
 
     @staticmethod
-    def _hold_until(c: Client, other_due: float | None, now: float) -> float | None:
+    def _hold_until(c: Client, others, now: float) -> float | None:
         """Until when due `c` waits for a session on its worker that used less time and is
-        due at `other_due` (None: it goes now): only a frame costlier than FAIR_FRAME_MS
-        that would still run then, not a preview (a drag's change must show), and for at
-        most FAIR_HOLD_FRAMES of its frames' time at a stretch (1 s before one is measured).
-        Two cheap streams held each other for nothing: one of 10 ms frames beside one at 60
-        frames a second drew 12 frames a second of its 30, the worker idle."""
+        due soon (`others`: (when due, its last frame's ms) of each; None: it goes now):
+        only a frame costlier than FAIR_FRAME_MS and FAIR_HOLD_RATIO times the other's,
+        that would still run when it is due, not a preview (a drag's change must show),
+        and for at most FAIR_HOLD_FRAMES of its frames' time at a stretch (1 s before one
+        is measured). Two cheap streams held each other for nothing: one of 10 ms frames
+        beside one at 60 frames a second drew 12 frames a second of its 30, the worker
+        idle; and on a loaded machine, a 640x360 stream whose frames took 45 ms was held
+        for a look's 15 ms ones, the worker idle a third of the time, and kept 0.32 of its
+        rate (tests/unit/test_streaming_scheduler.py)."""
         last = c.session.last_ms
-        if (other_due is None or c.session.previewing(now)
-                or (last is not None and (last <= FAIR_FRAME_MS or now + last / 1000.0 <= other_due))):
+        other_due = None
+        if last is not None and last > FAIR_FRAME_MS and not c.session.previewing(now):
+            other_due = min((due for due, ms in others if ms is None or last >= FAIR_HOLD_RATIO * ms),
+                            default=None)
+        elif last is None and not c.session.previewing(now):
+            other_due = min((due for due, _ in others), default=None)
+        if other_due is None or (last is not None and now + last / 1000.0 <= other_due):
             c.held_since = None
             return None
         if c.held_since is None:
