@@ -670,7 +670,12 @@ def test_a_costly_look_does_not_starve_a_stream_on_its_worker():
     1920x1080 on the same (only) interactive worker. Turns by frame, and the costly look
     climbing while quiet to first frames of 6.5 s, gave the stream 0.2 frames a second
     with gaps of 6 s; by time (about 0.7 of its rate kept here, and no gap near 1 s), it
-    must keep 40% of its rate and no gap over 1.5 s, for the suite's load."""
+    must keep 40% of its rate and no gap over 1.5 s, for the suite's load. A frame rate is
+    the machine's as much as the code's: CI's run, loaded by something else for a while,
+    measured 0.11 once (its other frame-rate tests missed too), so a miss is measured once
+    more before it fails (a starving scheduler misses both; scripts/fair_share.py gives the
+    numbers). With two CPU burners beside it, 0.40 (gaps 1.8 s) before the scheduler's
+    hold was bounded by cost ratio (FAIR_HOLD_RATIO), 0.65-0.70 (gaps 0.1-0.6 s) after."""
     from fogbank.model import presets as P
     from fogbank.model.params import FogParams
     from fogbank.model.urlstate import encode
@@ -711,11 +716,18 @@ def test_a_costly_look_does_not_starve_a_stream_on_its_worker():
         hostile = await h
         return alone, beside, hostile
 
+    tries = []
     try:
-        alone, beside, hostile = run_async(both())
-        (fa, ga), (fb, gb) = rate(alone), rate(beside)
-        print(f"\nalone {fa:.1f} fps (longest gap {ga:.2f} s); beside the costly look {fb:.1f} fps "
-              f"(longest gap {gb:.2f} s), kept {fb / fa:.2f}; the costly look drew {len(hostile)} frames")
+        for _ in range(2):   # once more only where the first missed: see the docstring
+            alone, beside, hostile = run_async(both())
+            (fa, ga), (fb, gb) = rate(alone), rate(beside)
+            tries.append({"alone_fps": round(fa, 1), "beside_fps": round(fb, 1), "kept": round(fb / fa, 2),
+                          "longest_gap_s": round(gb, 2), "costly_frames": len(hostile)})
+            print(f"\nalone {fa:.1f} fps (longest gap {ga:.2f} s); beside the costly look {fb:.1f} fps "
+                  f"(longest gap {gb:.2f} s), kept {fb / fa:.2f}; the costly look drew {len(hostile)} frames")
+            if fb >= 0.4 * fa and gb < 1.5 and len(hostile) >= 10:
+                break
+        print("tries:", tries)
         assert fb >= 0.4 * fa
         assert gb < 1.5
         assert len(hostile) >= 10                 # drawn, cheaper or slower, not refused
