@@ -68,6 +68,9 @@ class Settings(BaseSettings):
     max_viewers: int = Field(64, ge=1, le=10000, description="viewers of one live session (a "
                              "shared session's link); the next is refused with close code 1013. A viewer "
                              "costs a socket and its share of the sends, not a render")
+    max_viewers_per_client: int = Field(64, ge=1, le=10000, description="viewers of live sessions "
+                                        "that one client address may hold, over all sessions (a class "
+                                        "behind one NAT shares an address); the next is refused with 1013")
     messages_per_s: float = Field(120.0, gt=0, description="per-socket message rate (token bucket)")
     message_burst: int = Field(240, ge=1, description="per-socket burst of messages")
     max_sessions_per_client: int = Field(8, ge=1, le=10000, description="streaming sessions one "

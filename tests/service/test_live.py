@@ -307,3 +307,120 @@ def test_a_viewer_that_leaves_its_frames_unacknowledged_is_let_go():
         srv.stop()
     assert seen[-2:] == [1, 0]
     assert code == 4408
+
+
+def test_a_live_link_given_twice_is_refused_with_a_reason(client):
+    """Found by review: nginx routes /ws by the first `live` of a query and the server read
+    the last; a query with two is refused, and says why."""
+    p = presenter(client)
+    try:
+        token = share(p)["token"]
+        with client.websocket_connect(f"/ws?live={token}&live={token}") as w:
+            err = w.receive_json()
+            assert err["loc"] == ["live"]
+            assert "more than once" in err["msg"]
+            with pytest.raises(WebSocketDisconnect) as exc:
+                w.receive_json()
+            assert exc.value.code == 4404
+    finally:
+        p.__exit__(None, None, None)
+
+
+def test_one_address_holds_at_most_max_viewers_per_client_viewers():
+    """Found by review: viewers cost no render, but each holds a socket and its sends, and
+    one address could open them without bound (max_viewers is per session). The next past
+    max_viewers_per_client (2 here) is refused with 1013 and a reason that names the
+    setting; one that leaves frees its place."""
+    from fastapi.testclient import TestClient
+
+    from fogbank.service.api import create_app
+    from fogbank.settings import Settings
+    with TestClient(create_app(Settings(max_viewers_per_client=2))) as c:
+        p = presenter(c)
+        try:
+            token = share(p)["token"]
+            first, _ = viewer(c, token)
+            second, _ = viewer(c, token)
+            with c.websocket_connect(f"/ws?live={token}") as w:
+                err = w.receive_json()
+                assert err["loc"] == ["live"]
+                assert "max_viewers_per_client" in err["msg"]
+                with pytest.raises(WebSocketDisconnect) as exc:
+                    w.receive_json()
+                assert exc.value.code == 1013
+            second.__exit__(None, None, None)
+            read(p, until=lambda m: m["type"] == "audience" and m["viewers"] == 1)
+            third, _ = viewer(c, token)
+            third.__exit__(None, None, None)
+            first.__exit__(None, None, None)
+        finally:
+            p.__exit__(None, None, None)
+
+
+def test_a_viewers_refused_look_change_is_answered(client):
+    """Found by review: a viewer's message that the protocol refuses had no `answers`, so
+    a page that counts its look changes' answers waited for ever on a malformed one. It
+    says `answers` 1 for a look change's type, 0 otherwise (as the presenter's do)."""
+    p = presenter(client)
+    try:
+        token = share(p)["token"]
+        v, _ = viewer(client, token)
+        try:
+            v.send_json({"type": "camera", "camera": {"yaw": "left"}})
+            _, texts = read(v, until=lambda m: m["type"] == "error")
+            assert next(m for m in texts if m["type"] == "error")["answers"] == 1
+            v.send_json({"type": "no-such-type"})
+            _, texts = read(v, until=lambda m: m["type"] == "error")
+            assert next(m for m in texts if m["type"] == "error")["answers"] == 0
+        finally:
+            v.__exit__(None, None, None)
+    finally:
+        p.__exit__(None, None, None)
+
+
+def test_a_viewer_that_flips_its_codecs_forces_few_keyframes_on_the_others(client):
+    """Found by review: a viewer's every change of codecs asked the session for a
+    keyframe (and could switch its codec), so one that flipped them in every message made
+    every viewer's stream all keyframes. Its changes reach the session at most every
+    KEY_EVERY_S (1 s): flipping 30 times in about 1.5 s, another viewer's VP9 stream keeps
+    to a few keyframes."""
+    p = presenter(client)
+    open_ = [p]
+    try:
+        p.send_json({**VIEW, "codecs": ["vp09", "jpeg"]})
+        token = share(p)["token"]
+        watcher, _ = viewer(client, token)
+        flipper, _ = viewer(client, token)
+        open_ += [watcher, flipper]
+        watcher.send_json({**VIEW, "codecs": ["vp09", "jpeg"]})
+        flipper.send_json({**VIEW, "codecs": ["vp09", "jpeg"]})
+        box: dict = {}
+
+        def drain(name, ws, seconds):   # (arrival, header) for `seconds`, each acknowledged
+            out, t0 = [], time.monotonic()
+            while time.monotonic() - t0 < seconds:
+                m = ws.receive()
+                if m.get("bytes"):
+                    h = HEADER.unpack(m["bytes"][:HEADER.size])
+                    out.append((time.monotonic(), h))
+                    ws.send_json({"type": "ack", "frame": h[1]})
+            box[name] = out
+        threads = [threading.Thread(target=drain, args=("p", p, 4.0)),
+                   threading.Thread(target=drain, args=("w", watcher, 4.0))]
+        for t in threads:
+            t.start()
+        time.sleep(1.0)   # the stream going, in VP9
+        start = time.monotonic()
+        for i in range(30):   # 1.5 s of flips
+            flipper.send_json({**VIEW, "codecs": ["vp09", "jpeg"] if i % 2 else ["jpeg"]})
+            time.sleep(0.05)
+        for t in threads:
+            t.join(40)
+        after = [h for t, h in box["w"] if t >= start]
+        keys = [h for h in after if h[9] & FLAG_KEY]
+        print(f"\n{len(keys)} keyframes in {len(after)} frames while another viewer flipped its codecs 30 times")
+        assert len(after) >= 20
+        assert len(keys) <= 4   # about 2.5 s: at most one a second
+    finally:
+        for w in reversed(open_):
+            w.__exit__(None, None, None)

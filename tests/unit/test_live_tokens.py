@@ -16,6 +16,17 @@ def test_a_room_that_is_no_token_is_dropped_and_a_bad_live_is_kept_to_be_refused
     assert split_live("live=%3Cscript%3E") == ("", None, "%3Cscript%3E")
 
 
+def test_a_token_given_twice_is_not_read_as_one_of_them():
+    """Found by review: nginx routes by the first `live` (and `room`) of a query, and the
+    server read the last, so `live=A&live=B` could reach A's replica and join B there. Two
+    `live` values come back joined by "&", no token (the viewer is refused); two rooms are
+    dropped (the session gets a token of its own when shared)."""
+    a, b = "abcdefghijklmnop1234", "qrstuvwxyzABCDEF5678"
+    assert split_live(f"live={a}&live={b}") == ("", None, f"{a}&{b}")
+    assert split_live(f"time=3&room={a}&room={b}") == ("time=3", None, None)
+    assert split_live(f"time=3&room={a}&room={a}") == ("time=3", None, None)
+
+
 def test_a_watched_session_never_yields_its_place():
     """A presenter of a paused look with viewers (a class listening) renders nothing and
     says nothing, yet is not the session that gives its place to a newcomer; the same

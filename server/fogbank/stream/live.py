@@ -39,7 +39,8 @@ from typing import TYPE_CHECKING, Any
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
 from fogbank.service import metrics
-from fogbank.stream.peer import LOOK_CHANGES, STEERING, TOO_LARGE, Peer, apply_change, next_message
+from fogbank.stream.peer import (LOOK_CHANGES, STEERING, TOO_LARGE, Peer, apply_change, next_message,
+                                 refused_answers)
 from fogbank.stream.protocol import (MAX_MESSAGE, PROTOCOL, AckMsg, ControlMsg, InteractMsg, PongMsg, ProtocolError,
                                      ShareMsg, ViewMsg, parse)
 from fogbank.stream.session import MAX_IN_FLIGHT, PLAY_BUDGET_MS, REFINE_BUDGET_MS, Session
@@ -66,17 +67,20 @@ MAX_QUEUED = 64      # texts a viewer may leave unread (its errors, mostly) befo
 
 def split_live(query: str) -> tuple[str, str | None, str | None]:
     """The look's query, and the `room` and `live` tokens beside it (None: absent). A
-    `live` that is not a token is returned as it is (the caller refuses it); a `room` that
-    is not one is dropped (the session is given a token when shared)."""
-    look, room, live = [], None, None
+    `live` that is not a token is returned as it is (the caller refuses it), and one given
+    more than once as all of its values joined by "&" (refused too: the load balancer
+    routes by the first, and the server would read another); a `room` that is not one, or
+    is given more than once, is dropped (the session is given a token when shared)."""
+    look, rooms, lives = [], [], []
     for part in query.split("&") if query else []:
         if part.startswith("room="):
-            room = part[5:] if ROOM.fullmatch(part[5:]) else None
+            rooms.append(part[5:])
         elif part.startswith("live="):
-            live = part[5:]
+            lives.append(part[5:])
         elif part:
             look.append(part)
-    return "&".join(look), room, live
+    room = rooms[0] if len(rooms) == 1 and ROOM.fullmatch(rooms[0]) else None
+    return "&".join(look), room, "&".join(lives) if lives else None
 
 
 _DROPPING: set = set()   # viewers' forced closes under way (the loop keeps weak references)
@@ -91,6 +95,7 @@ class Viewer(Peer):
         self.inflight: dict[int, float] = {}   # frame id -> when sent, not yet acknowledged
         self.waiting_key = True   # video frames wait for a keyframe (a new viewer, or one that skipped)
         self.codecs: tuple[str, ...] = ("jpeg",)   # what its page decodes (its view message)
+        self.told_codecs = False   # its first view message (as it joins) came
         self.frames = 0    # frames sent to it
         self.last_frame = 0   # the id of the last frame given it
         self.queued_frames = 0   # frames given it and not yet written to its socket
@@ -212,6 +217,7 @@ class Audience:
         self.viewers: dict[str, Viewer] = {}
         self.control: str | None = None
         self.key_asked = -math.inf
+        self.codecs_due = False   # a viewer changed its codecs since the session's were settled
 
     @property
     def session(self) -> Session:
@@ -282,16 +288,31 @@ class Audience:
             self.control = to
             self.session.interacting = False
 
-    def set_codecs(self, viewer: Viewer, codecs: tuple[str, ...]) -> None:
+    def set_codecs(self, viewer: Viewer, codecs: tuple[str, ...], now: float) -> None:
+        first, viewer.told_codecs = not viewer.told_codecs, True
         if codecs != viewer.codecs:
             viewer.codecs = codecs
-            viewer.waiting_key = True
-            self.session.need_key = True
+            viewer.waiting_key = True   # its decoder starts again
+            self.codecs_due = True
+            if first:   # what its page decodes, said as it joins: at once, as a join's keyframe
+                self.key_asked = -math.inf
+            self._settle_codecs(now)
+
+    def _settle_codecs(self, now: float) -> None:
+        """A viewer's new codecs reach the session (its codec, and a keyframe) at most every
+        KEY_EVERY_S, the rest at its next frame after: a viewer that flipped its codecs in
+        every message forced a keyframe (or a new encoder) on every viewer each time. Until
+        then it skips the frames it cannot decode (fan_out)."""
+        if self.codecs_due and now - self.key_asked >= KEY_EVERY_S:
+            self.codecs_due = False
+            self.key_asked = now
             self._codecs()
+            self.session.need_key = True
 
     async def fan_out(self, frame: int, codec: str, key: bool, data: bytes, stats: dict[str, Any] | None,
                       now: float) -> None:
         """The presenter's frame (header and bytes), to every viewer with room for it."""
+        self._settle_codecs(now)
         video = codec != "jpeg"
         for v in list(self.viewers.values()):
             if v.closed:
@@ -386,7 +407,10 @@ async def viewer_endpoint(ws: WebSocket, streamer: Any, token: str, addr: str, r
     presenter = streamer.live.get(token) if TOKEN.fullmatch(token) else None
     audience = presenter.audience if presenter is not None else None
     refusal = None
-    if not TOKEN.fullmatch(token):
+    if "&" in token:
+        refusal = (NO_SUCH_CLOSE, "live= is given more than once: a live link has one token; open the link "
+                   "the presenter shared as it is")
+    elif not TOKEN.fullmatch(token):
         refusal = (NO_SUCH_CLOSE, "this is not a live link: its token (live=) is the presenter's room (16-64 of "
                    "A-Z a-z 0-9 - _), a dot and 16 more; ask the presenter for the link again")
     elif audience is None:
@@ -394,6 +418,10 @@ async def viewer_endpoint(ws: WebSocket, streamer: Any, token: str, addr: str, r
                    "(ask the presenter for it again)")
     elif len(audience.viewers) >= cfg.max_viewers:
         refusal = (1013, f"this live session has its most viewers ({cfg.max_viewers}); retry later")
+    elif sum(v.addr == addr for c in streamer.live.values() if c.audience
+             for v in c.audience.viewers.values()) >= cfg.max_viewers_per_client:
+        refusal = (1013, f"this address watches the most live sessions it may ({cfg.max_viewers_per_client} "
+                   "viewers, setting max_viewers_per_client); close one and retry")
     if refusal:
         try:
             await ws.send_json({"type": "error", "loc": ["live"], "msg": refusal[1]})
@@ -437,7 +465,8 @@ async def viewer_endpoint(ws: WebSocket, streamer: Any, token: str, addr: str, r
             try:
                 parsed = parse(data)
             except ProtocolError as exc:
-                await viewer.send_json({"type": "error", "detail": exc.errors, "msg": str(exc)})
+                await viewer.answer_error({"type": "error", "detail": exc.errors, "msg": str(exc)},
+                                          refused_answers(data), now)
                 continue
             if isinstance(parsed, AckMsg):
                 viewer.ack(parsed.frame)
@@ -445,7 +474,7 @@ async def viewer_endpoint(ws: WebSocket, streamer: Any, token: str, addr: str, r
             elif isinstance(parsed, PongMsg):
                 pass
             elif isinstance(parsed, ViewMsg):   # its codecs; the size is the presenter's
-                audience.set_codecs(viewer, tuple(parsed.codecs))
+                audience.set_codecs(viewer, tuple(parsed.codecs), now)
                 streamer.wake()
             elif isinstance(parsed, ShareMsg):
                 await viewer.send_json({"type": "error", "loc": ["message", "type"],

@@ -25,6 +25,16 @@ from fogbank.stream.session import MAX_IN_FLIGHT, Session
 OWED = ("state", "camera")
 LOOK_CHANGES = (QueryMsg, ParamsMsg, CameraMsg, SeekMsg)
 LOOK_CHANGE_TYPES = {"query", "params", "camera", "seek"}
+
+
+def refused_answers(data: str | bytes) -> int:
+    """What the error for a message the protocol refused answers: 1 when its "type" is a
+    look change (the page counts its changes' answers), else 0."""
+    try:
+        msg = json.loads(data)
+    except (ValueError, RecursionError, UnicodeDecodeError):
+        return 0
+    return int(isinstance(msg, dict) and msg.get("type") in LOOK_CHANGE_TYPES)
 # the messages that steer the session: only whoever has control sends them (stream/live.py)
 STEERING = (*LOOK_CHANGES, PlayMsg, SpeedMsg, InteractMsg)
 

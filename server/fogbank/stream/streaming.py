@@ -24,7 +24,6 @@ a reason the page shows.
 from __future__ import annotations
 
 import asyncio
-import json
 import logging
 import time
 import uuid
@@ -42,20 +41,11 @@ from fogbank.stream.protocol import (FLAG_FULL, FLAG_KEY, FLAG_PLAYING, FLAG_RED
                                      ProtocolError, QueryMsg, frame_header, parse)
 from fogbank.stream.link import PING_EVERY_S
 from fogbank.stream import live
-from fogbank.stream.peer import LOOK_CHANGE_TYPES, TOO_LARGE, Peer, apply_change, next_message
+from fogbank.stream.peer import TOO_LARGE, Peer, apply_change, next_message, refused_answers
 from fogbank.stream.session import PLAY_BUDGET_MS, REFINE_BUDGET_MS, FrameJob, Session
 from fogbank.workers.supervisor import DeadlineExceeded, Slot, Supervisor, WorkerError
 
 log = logging.getLogger("fogbank.stream")
-
-
-def _type_of(data: str | bytes) -> Any:
-    """The "type" of a message that the protocol refused, if it has one."""
-    try:
-        msg = json.loads(data)
-    except (ValueError, RecursionError, UnicodeDecodeError):
-        return None
-    return msg.get("type") if isinstance(msg, dict) else None
 
 
 LINK_EVERY_S = 1.0   # the link's estimate is sent at most this often (a "link" message)
@@ -614,7 +604,7 @@ async def websocket_endpoint(ws: WebSocket, streamer: Streamer, renderer_info: d
                 parsed = parse(data)
             except ProtocolError as exc:
                 await client.answer_error({"type": "error", "detail": exc.errors, "msg": str(exc)},
-                                          int(_type_of(data) in LOOK_CHANGE_TYPES), streamer.clock())
+                                          refused_answers(data), streamer.clock())
                 continue
             acked = session.acked
             if not await live.presenter_message(client, parsed, streamer, streamer.clock()):
