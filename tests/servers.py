@@ -116,13 +116,47 @@ class Server:
         return Path(self.log.name).read_text(errors="replace")
 
 
+def ingress_http(servers: str) -> str:
+    """docker/k8s's ingresses as ingress-nginx routes them, in plain nginx: an upstream per
+    service (`servers` are the pods), hashed by its ingress's `upstream-hash-by` where it
+    has one (ingress-nginx's balancer hashes consistently; nginx's plain `hash` routes by
+    the same key), a location per path (Exact: `=`), WebSockets passed through. Only what
+    routes is built: no timeouts, buffers or retries."""
+    import yaml
+    ups, locs = {}, []
+    for path in sorted((DOCKER / "k8s").glob("ingress*.yaml")):
+        ing = yaml.safe_load(path.read_text())
+        key = ing["metadata"].get("annotations", {}).get("nginx.ingress.kubernetes.io/upstream-hash-by")
+        for rule in ing["spec"]["rules"]:
+            for p in rule["http"]["paths"]:
+                svc = p["backend"]["service"]["name"].replace("-", "_")
+                ups[svc] = f"        hash {key};\n" if key else ""
+                exact = "= " if p["pathType"] == "Exact" else ""
+                locs.append(f"""
+    location {exact}{p["path"]} {{
+        proxy_pass http://{svc};
+        proxy_http_version 1.1;
+        proxy_set_header Upgrade $http_upgrade;
+        proxy_set_header Connection "upgrade";
+        proxy_set_header Host $host;
+    }}""")
+    return "".join(f"""
+    upstream {name} {{
+{hashed}{servers}
+    }}""" for name, hashed in ups.items()) + f"""
+    server {{
+        include listen.conf;{"".join(locs)}
+    }}"""
+
+
 class Nginx:
     """Debian's nginx with docker/nginx/fogbank.conf in front of `upstreams`, every path
     (pid, logs, temp) inside a temp dir."""
 
-    def __init__(self, upstreams: list[int], read_timeout_s: int | None = None):
+    def __init__(self, upstreams: list[int], read_timeout_s: int | None = None, ingress: bool = False):
         """`read_timeout_s`: the config's proxy_read_timeout values replaced by this (a
-        test of failover need not wait the 65 s the app's longest answer needs)."""
+        test of failover need not wait the 65 s the app's longest answer needs).
+        `ingress`: instead of fogbank.conf, the Kubernetes ingresses' routing (ingress_http)."""
         self.port = free_port()
         self.url = f"http://127.0.0.1:{self.port}"
         self.dir = Path(tempfile.mkdtemp(prefix="fogbank-nginx-"))
@@ -135,6 +169,8 @@ class Nginx:
             conf = d / "fogbank.conf"
             conf.write_text(text.replace("proxy_read_timeout 65s;", f"proxy_read_timeout {read_timeout_s}s;"))
         (d / "listen.conf").write_text(f"listen 127.0.0.1:{self.port};\n")
+        body = ingress_http(servers) if ingress else (
+            f"    upstream fogbank {{\n        hash $fogbank_route;\n{servers}\n    }}\n    include {conf};")
         (d / "nginx.conf").write_text(f"""
 daemon off;
 worker_processes 1;
@@ -148,11 +184,7 @@ http {{
     fastcgi_temp_path {d}/fastcgi;
     uwsgi_temp_path {d}/uwsgi;
     scgi_temp_path {d}/scgi;
-    upstream fogbank {{
-        hash $fogbank_route;
-{servers}
-    }}
-    include {conf};
+{body}
 }}
 """)
         self.proc: subprocess.Popen | None = None

@@ -424,3 +424,22 @@ def test_a_viewer_that_flips_its_codecs_forces_few_keyframes_on_the_others(clien
     finally:
         for w in reversed(open_):
             w.__exit__(None, None, None)
+
+
+def test_a_viewer_whose_room_is_not_its_tokens_is_refused(client):
+    """A viewer's page gives its token's room beside it (the Kubernetes ingress hashes by
+    `room` alone); the token's own room is taken, another refused with a reason."""
+    p = presenter(client)
+    try:
+        token = share(p)["token"]
+        with client.websocket_connect(f"/ws?live={token}&room={ROOM}") as w:
+            assert w.receive_json()["type"] == "hello"
+        with client.websocket_connect(f"/ws?live={token}&room=another-room-of-16-chars") as w:
+            err = w.receive_json()
+            assert err["loc"] == ["live"]
+            assert "room=" in err["msg"]
+            with pytest.raises(WebSocketDisconnect) as exc:
+                w.receive_json()
+            assert exc.value.code == 4404
+    finally:
+        p.__exit__(None, None, None)

@@ -25,7 +25,9 @@ const [schema, presets] = await Promise.all([
 // a viewer of a live session connects with its token alone (the look is the presenter's);
 // a page of its own connects with its look and a room (live.js)
 const stream = new Stream(canvas, () => (liveToken ? "" : location.search.slice(1)));
-stream.extra = liveToken ? `live=${liveToken}` : `room=${newRoom()}`;
+// a viewer gives its token's room too: a load balancer that hashes by `room` alone (the
+// Kubernetes ingress, docker/k8s/ingress-ws.yaml) sends it where its presenter is
+stream.extra = liveToken ? `live=${liveToken}&room=${liveToken.split(".")[0]}` : `room=${newRoom()}`;
 const steers = () => canSteer(store.get().live);
 window.fogbank = {
   stream, store,

@@ -4,7 +4,8 @@ viewer of its live link.
 The presenter's page connects with `room=<token>` beside its look: a random key that the
 load balancer routes /ws by (docker/nginx/fogbank.conf hashes `live` and `room`), and which
 "share" makes the live link's token. A viewer connects with `live=<token>` alone and so
-reaches the replica that holds the session. A token is 16-64 URL-safe characters; a
+reaches the replica that holds the session (the page gives `room=<its room>` beside it,
+for a load balancer that hashes by `room` alone). A token is 16-64 URL-safe characters; a
 presenter that gave none (or one in use) is given a random one, reachable directly.
 
 A viewer gets the presenter's frames as they are (its codec, size and quality), the look's
@@ -401,8 +402,11 @@ def end_live(client: "Client", streamer: Any, reason: str) -> None:
     log.info("live session ended", extra={"session": client.session.id, "reason": reason})
 
 
-async def viewer_endpoint(ws: WebSocket, streamer: Any, token: str, addr: str, renderer_info: dict) -> None:
-    """/ws?live=<token>: one viewer of a live session."""
+async def viewer_endpoint(ws: WebSocket, streamer: Any, token: str, addr: str, renderer_info: dict,
+                          room: str | None = None) -> None:
+    """/ws?live=<token>[&room=<its room>]: one viewer of a live session. The page gives the
+    token's room too, which a load balancer that cannot take a token apart hashes by
+    (docker/k8s/ingress-ws.yaml); one that is not the token's is refused."""
     cfg = streamer.settings
     presenter = streamer.live.get(token) if TOKEN.fullmatch(token) else None
     audience = presenter.audience if presenter is not None else None
@@ -410,6 +414,9 @@ async def viewer_endpoint(ws: WebSocket, streamer: Any, token: str, addr: str, r
     if "&" in token:
         refusal = (NO_SUCH_CLOSE, "live= is given more than once: a live link has one token; open the link "
                    "the presenter shared as it is")
+    elif room is not None and room != token.split(".")[0]:
+        refusal = (NO_SUCH_CLOSE, "room= is not this live link's room: give the part of live= before its dot, "
+                   "or leave room= out")
     elif not TOKEN.fullmatch(token):
         refusal = (NO_SUCH_CLOSE, "this is not a live link: its token (live=) is the presenter's room (16-64 of "
                    "A-Z a-z 0-9 - _), a dot and 16 more; ask the presenter for the link again")

@@ -536,7 +536,7 @@ async def websocket_endpoint(ws: WebSocket, streamer: Streamer, renderer_info: d
     addr = ws.client.host if ws.client else "?"
     query, room, token = live.split_live(ws.url.query)
     if token is not None:   # a viewer of a live session: no session, no render of its own
-        await live.viewer_endpoint(ws, streamer, token, addr, renderer_info)
+        await live.viewer_endpoint(ws, streamer, token, addr, renderer_info, room)
         return
     refusal = None
     yielded: list[Client] = []
