@@ -136,6 +136,120 @@ async def separate(url: str, sessions: int, seconds: float = 6.0, size=(640, 360
     return {"sessions": sessions, "fps_min": round(min(fps), 2), "fps_mean": round(sum(fps) / sessions, 2)}
 
 
+def _rss(pid: int) -> int:
+    """Resident bytes of process `pid`."""
+    return proctree.rss_bytes(pid)
+
+
+def _viewers_gauge(url: str) -> float:
+    with urllib.request.urlopen(url + "/metrics", timeout=10) as r:
+        for line in r.read().decode().splitlines():
+            if line.startswith("fogbank_live_viewers "):
+                return float(line.split()[-1])
+    return -1.0
+
+
+async def churn(url: str, seconds: float = 20.0, pid: int | None = None, most: int = 12, seed: int = 1,
+                size=(320, 180)) -> dict:
+    """A presenter plays a shared look (VP9, acknowledging every frame) while viewers join
+    and leave its live link for `seconds`, at most `most` at once, each one of: "good"
+    (acknowledges, stays 0.2-2 s, closes), "mute" (never acknowledges, stays 1-3 s),
+    "abrupt" (acknowledges, then its TCP connection is cut, no close), "flipper" (flips its
+    codecs every 50 ms, stays 1-2 s). Returns the presenter's frames a second alone (2 s)
+    and during the churn, how many viewers came and of which kind, the frames they got,
+    what the presenter was last told of its viewers and the server's viewer gauge once
+    they are gone, and (with the server's `pid`) the web process's resident MB before the
+    churn (after 5 viewers came and went) and after."""
+    import random
+    rnd = random.Random(seed)
+    ws_url = url.replace("http", "ws", 1) + "/ws?"
+    room = secrets.token_urlsafe(16)
+    view = {"type": "view", "width": size[0], "height": size[1], "fps": 30, "codecs": ["vp09", "jpeg"]}
+    frames = {"presenter": [], "viewers": 0}
+    told = {"viewers": None}
+    async with websockets.connect(ws_url + f"v=1&time=3&room={room}", max_size=2**24, max_queue=None) as p:
+        await p.recv(), await p.recv()
+        await p.send(json.dumps(view))
+        await p.send(json.dumps({"type": "share"}))
+        token = asyncio.get_running_loop().create_future()
+
+        async def present():
+            try:
+                while True:
+                    m = await p.recv()
+                    if isinstance(m, bytes):
+                        frames["presenter"].append(time.monotonic())
+                        await p.send(json.dumps({"type": "ack", "frame": struct.unpack_from("<I", m, 4)[0]}))
+                    else:
+                        msg = json.loads(m)
+                        if msg.get("type") == "audience":
+                            told["viewers"] = msg["viewers"]
+                            if msg["token"] and not token.done():
+                                token.set_result(msg["token"])
+            except websockets.ConnectionClosed:
+                return
+        presenting = asyncio.ensure_future(present())
+        tok = await asyncio.wait_for(token, 30)
+        live = ws_url + f"live={tok}&room={tok.split('.')[0]}"
+
+        async def viewer(kind: str, stay: float):
+            try:
+                v = await websockets.connect(live, max_size=2**24, max_queue=None)
+            except (OSError, websockets.InvalidHandshake):
+                return
+            try:
+                await v.send(json.dumps(view))
+                end = time.monotonic() + stay
+                flip = 0
+                while (left := end - time.monotonic()) > 0:
+                    try:
+                        m = await asyncio.wait_for(v.recv(), min(left, 0.05))
+                    except asyncio.TimeoutError:
+                        m = None
+                    if isinstance(m, bytes):
+                        frames["viewers"] += 1
+                        if kind != "mute":
+                            await v.send(json.dumps({"type": "ack", "frame": struct.unpack_from("<I", m, 4)[0]}))
+                    if kind == "flipper":
+                        flip += 1
+                        await v.send(json.dumps({**view, "codecs": ["vp09", "jpeg"] if flip % 2 else ["jpeg"]}))
+                if kind == "abrupt":
+                    v.transport.abort()
+                else:
+                    await v.close()
+            except websockets.ConnectionClosed:
+                pass
+
+        await asyncio.sleep(2.0)   # the look's programs, the presenter alone
+        await asyncio.gather(*(viewer("good", 0.5) for _ in range(5)))
+        await asyncio.sleep(1.0)
+        rss0 = _rss(pid) if pid else 0
+        t0 = time.monotonic()
+        alone = [t for t in frames["presenter"] if t0 - 2.0 <= t < t0]
+        kinds = {"good": 0, "mute": 0, "abrupt": 0, "flipper": 0}
+        running: set = set()
+        while time.monotonic() - t0 < seconds:
+            running = {t for t in running if not t.done()}
+            if len(running) < most:
+                kind = rnd.choice(["good", "good", "mute", "abrupt", "flipper"])
+                kinds[kind] += 1
+                stay = {"good": rnd.uniform(0.2, 2.0), "mute": rnd.uniform(1.0, 3.0),
+                        "abrupt": rnd.uniform(0.2, 2.0), "flipper": rnd.uniform(1.0, 2.0)}[kind]
+                running.add(asyncio.ensure_future(viewer(kind, stay)))
+            await asyncio.sleep(rnd.uniform(0.02, 0.2))
+        t1 = time.monotonic()
+        await asyncio.gather(*running)
+        during = [t for t in frames["presenter"] if t0 <= t < t1]
+        deadline = time.monotonic() + 15.0   # the abrupt ones: their sockets found dead
+        while time.monotonic() < deadline and (told["viewers"] != 0 or _viewers_gauge(url) != 0):
+            await asyncio.sleep(0.25)
+        rss1 = _rss(pid) if pid else 0
+        presenting.cancel()
+    return {"presenter_fps_alone": round(len(alone) / 2.0, 2), "presenter_fps": round(len(during) / (t1 - t0), 2),
+            "viewers": kinds, "viewer_frames": frames["viewers"], "told_viewers": told["viewers"],
+            "viewers_gauge": _viewers_gauge(url), "web_rss_mb": (round(rss0 / 2**20, 1), round(rss1 / 2**20, 1))}
+
+
 def bench(viewers=(0, 1, 5, 10, 20), seconds: float = 8.0, out: str | None = None) -> list[dict]:
     """`audience` with each number of viewers, on one server of this code (one worker)."""
     from fogbank.tools.child import ChildServer
