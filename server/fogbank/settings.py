@@ -68,6 +68,9 @@ class Settings(BaseSettings):
     max_viewers: int = Field(64, ge=1, le=10000, description="viewers of one live session (a "
                              "shared session's link); the next is refused with close code 1013. A viewer "
                              "costs a socket and its share of the sends, not a render")
+    live_resume_s: float = Field(10.0, ge=0, le=300, description="how long a live session's viewers wait "
+                                 "for its presenter to reconnect (a network blip) before it ends for them; "
+                                 "0: it ends when the presenter's socket does")
     max_viewers_per_client: int = Field(64, ge=1, le=10000, description="viewers of live sessions "
                                         "that one client address may hold, over all sessions (a class "
                                         "behind one NAT shares an address); the next is refused with 1013")

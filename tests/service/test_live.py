@@ -139,16 +139,33 @@ def test_control_is_handed_to_a_viewer_and_back(client):
         p.__exit__(None, None, None)
 
 
-def test_a_presenter_who_leaves_ends_the_session_for_its_viewers(client):
+@pytest.fixture(scope="module")
+def resuming():
+    """An app whose live sessions wait 2 s for their presenter (live_resume_s)."""
+    from fastapi.testclient import TestClient
+
+    from fogbank.service.api import create_app
+    from fogbank.settings import Settings
+    with TestClient(create_app(Settings(live_resume_s=2.0))) as c:
+        yield c
+
+
+def test_a_presenter_who_leaves_ends_the_session_for_its_viewers(resuming):
+    """Its viewers are told it is away, wait live_resume_s (2 s here) for its page to come
+    back, then are told it ended (4410)."""
+    client = resuming
     p = presenter(client)
     token = share(p)["token"]
     v, _ = viewer(client, token)
     try:
         read(v, 2)
         p.__exit__(None, None, None)
+        t0 = time.monotonic()
+        read(v, until=lambda m: m["type"] == "audience" and m["away"])
         with pytest.raises(WebSocketDisconnect) as exc:
             read(v, until=lambda m: False, timeout=10)
         assert exc.value.code == 4410
+        assert 1.5 <= time.monotonic() - t0 <= 6.0
         # and the link now leads nowhere, said so
         w = client.websocket_connect(f"/ws?live={token}")
         with w:
@@ -469,3 +486,46 @@ def test_viewers_joining_and_leaving_cost_the_presenter_nothing_and_leave_nothin
     assert r["told_viewers"] == 0
     assert r["viewers_gauge"] == 0
     assert r["web_rss_mb"][1] - r["web_rss_mb"][0] <= 16
+
+
+def test_a_presenter_whose_page_reconnects_keeps_its_viewers(resuming):
+    """A network blip on the presenter's side: its page reconnects with its room and the
+    resume key its audience messages gave it (never the viewers'), and its viewers watch
+    its new session: its look, then frames from a keyframe, acknowledged as before. The
+    token alone (what every viewer knows) takes nothing over."""
+    client = resuming
+    p = presenter(client)
+    aud = share(p)
+    token, key = aud["token"], aud["resume"]
+    v, _ = viewer(client, token)
+    try:
+        _, texts = read(v, 2, until=lambda m: m["type"] == "audience")   # (the presenter acks nothing here)
+        assert all("resume" not in m for m in texts if m["type"] == "audience")
+        p.__exit__(None, None, None)
+        read(v, until=lambda m: m["type"] == "audience" and m["away"])
+        # a viewer's try with the token as the key: a new session of its own, not live
+        thief = client.websocket_connect(f"/ws?time=3&room={ROOM}&resume={token.split('.')[1]}")
+        thief.__enter__()
+        thief.receive_json(), thief.receive_json()
+        thief.__exit__(None, None, None)
+        q = client.websocket_connect(f"/ws?time=7&room={ROOM}&resume={key}")
+        q.__enter__()
+        try:
+            q.receive_json(), q.receive_json()   # hello, state
+            q.send_json({**VIEW, "codecs": ["vp09", "jpeg"]})
+            _, texts = read(q, until=lambda m: m["type"] == "audience" and m["viewers"] == 1)
+            back = next(m for m in texts if m["type"] == "audience")
+            assert (back["token"], back["away"]) == (token, False)
+            # the viewer: the new session's look, then its frames, and no end
+            box = {}
+            t = threading.Thread(target=lambda: box.update(q=read(q, 12)[0]))
+            t.start()
+            frames, texts = read(v, 8, until=lambda m: m["type"] == "state" and "time=7" in m["query"])
+            t.join(30)
+            assert not [m for m in texts if m["type"] == "ended"]
+            new_ids = {h[1] for h, _ in box["q"]}
+            assert len([h for h, _ in frames if h[1] in new_ids]) >= 4
+        finally:
+            q.__exit__(None, None, None)
+    finally:
+        v.__exit__(None, None, None)

@@ -363,3 +363,9 @@ def test_a_stream_is_not_held_for_a_look_of_like_cost_on_a_loaded_machine():
     assert beside["b"] >= 0.5 * 300
     busy = beside["a"] * 45.0 + beside["b"] * 15.0
     assert busy >= 0.95 * 10_000                              # 0.69 before: held, idle
+    # and mid-cost looks are still held for a cheap stream (found by review: a hold by
+    # cost ratio left a 26 ms stream 0.27 of its rate beside 100 ms frames)
+    for look_ms in (60.0, 100.0):
+        alone, _ = _share({"a": 26.0}, {"a": 30}, 10.0)
+        beside, _ = _share({"a": 26.0, "b": look_ms}, {"a": 30, "b": 30}, 10.0)
+        assert beside["a"] >= 0.6 * alone["a"]

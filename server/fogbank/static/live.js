@@ -40,6 +40,12 @@ export function liveUi({ stream, store, $, toast, lookQuery }) {
     const { type, ...live } = e.detail;
     if (store.get().live?.ended) return;   // (one sent as the session ended)
     store.set({ live: live.token ? live : null });
+    // a presenter's page reconnects (a blip) with its room and the resume key, which gives
+    // it its live session back (stream/live.py resume_live); its viewers wait meanwhile
+    if (live.role === "presenter") {
+      const room = new URLSearchParams(stream.extra).get("room");
+      stream.extra = live.token && live.resume ? `room=${room}&resume=${live.resume}` : `room=${room}`;
+    }
     if (live.token && live.role === "presenter" && copyWhenShared) {
       copyWhenShared = false;
       copy(liveLink(live.token), "Live link copied: whoever opens it watches this session");

@@ -21,8 +21,10 @@ MAX_QUEUED texts): one that stops reading is closed.
 The presenter can hand control to a viewer ("control"): then that viewer's look changes
 apply to the session (and the presenter's do not) until the presenter takes it back or the
 viewer gives it back. A presenter who leaves or stops sharing ends the session for its
-viewers: an "ended" message with the reason, then close code 4410. A viewer who leaves
-costs nothing.
+viewers: an "ended" message with the reason, then close code 4410; a presenter whose
+socket drops (a blip) is waited for live_resume_s (its viewers told it is away), and its
+page, reconnecting with its room and the resume key only it was given, takes the session
+back (resume_live). A viewer who leaves costs nothing.
 """
 
 from __future__ import annotations
@@ -82,6 +84,15 @@ def split_live(query: str) -> tuple[str, str | None, str | None]:
             look.append(part)
     room = rooms[0] if len(rooms) == 1 and ROOM.fullmatch(rooms[0]) else None
     return "&".join(look), room, "&".join(lives) if lives else None
+
+
+def take_resume(query: str) -> tuple[str, str | None]:
+    """The look's query without `resume=<key>` (a presenter's page reconnecting to its live
+    session: resume_live), and the key (None: absent or not one)."""
+    parts = query.split("&") if query else []
+    keys = [p[7:] for p in parts if p.startswith("resume=")]
+    rest = "&".join(p for p in parts if not p.startswith("resume="))
+    return rest, keys[0] if len(keys) == 1 and ROOM.fullmatch(keys[0]) else None
 
 
 _DROPPING: set = set()   # viewers' forced closes under way (the loop keeps weak references)
@@ -219,6 +230,11 @@ class Audience:
         self.control: str | None = None
         self.key_asked = -math.inf
         self.codecs_due = False   # a viewer changed its codecs since the session's were settled
+        # the presenter's alone: its page reconnects with it (`resume=`) after a blip, and
+        # the viewers, who know the token, cannot take the session over with it
+        self.resume_key = secrets.token_urlsafe(16)
+        self.away_since: float | None = None   # the presenter's socket ended then (not yet back)
+        self.ended = False
 
     @property
     def session(self) -> Session:
@@ -228,9 +244,10 @@ class Audience:
         presenter = peer is self.presenter
         msg = {"type": "audience", "role": "presenter" if presenter else "viewer", "token": self.token,
                "viewers": len(self.viewers), "control": self.control,
-               "you": None if presenter else getattr(peer, "id", None)}
+               "you": None if presenter else getattr(peer, "id", None), "away": self.away_since is not None}
         if presenter:
             msg["ids"] = list(self.viewers)
+            msg["resume"] = self.resume_key
         return msg
 
     async def tell(self) -> None:
@@ -338,6 +355,7 @@ class Audience:
 
     def end(self, reason: str) -> None:
         """The live session is over: each viewer is told why, then closed."""
+        self.ended = True
         for v in list(self.viewers.values()):
             self.leave(v)
             v._put("text", json.dumps({"type": "ended", "msg": reason}))
@@ -390,6 +408,69 @@ async def presenter_message(client: "Client", parsed: Any, streamer: Any, now: f
     return False
 
 
+def presenter_left(client: "Client", streamer: Any, now: float) -> None:
+    """The presenter's socket ended. With viewers watching, they wait live_resume_s for its
+    page to reconnect (`resume_live`; a network blip must not end a class's session) and
+    are told it is away; else, or with live_resume_s 0, the live session ends."""
+    audience = client.audience
+    if audience is None:
+        return
+    if not audience.viewers or streamer.settings.live_resume_s <= 0:
+        end_live(client, streamer, "the presenter left")
+        return
+    client.audience = None
+    audience.away_since = now
+    streamer.away[audience.resume_key] = audience
+    log.info("live session's presenter away", extra={"session": client.session.id})
+    for v in audience.viewers.values():
+        v.audience_due = True
+        v._wake.set()
+
+
+def resume_live(client: "Client", streamer: Any, key: str, now: float) -> bool:
+    """`client`, a presenter's page reconnected with `resume=<key>` and its room, takes its
+    live session back: its viewers watch its new session from here (its state, then a
+    keyframe). False where there is none to take (ended, another room, another key)."""
+    audience = streamer.away.get(key)
+    if audience is None or client.room is None or audience.token.split(".")[0] != client.room:
+        return False
+    del streamer.away[key]
+    audience.presenter = client
+    audience.away_since = None
+    client.audience = audience
+    streamer.live[audience.token] = client
+    state = json.dumps(client.session.state(now))
+    for v in audience.viewers.values():
+        v.session = client.session
+        v.inflight.clear()   # the new session's frames count from 1 again
+        v.last_frame = 0
+        v.waiting_key = True
+        v._put("text", state)
+    audience._codecs()
+    client.session.need_key = True
+    log.info("live session resumed", extra={"session": client.session.id})
+    return True
+
+
+def expire_away(streamer: Any, now: float) -> None:
+    """Live sessions whose presenter did not come back within live_resume_s end."""
+    for key, audience in list(streamer.away.items()):
+        if now - audience.away_since >= streamer.settings.live_resume_s:
+            del streamer.away[key]
+            if streamer.live.get(audience.token) is audience.presenter:
+                del streamer.live[audience.token]
+            audience.end("the presenter left")
+            log.info("live session ended", extra={"session": audience.session.id, "reason": "presenter away"})
+
+
+def find_audience(streamer: Any, token: str) -> "Audience | None":
+    """The live session with this token: its presenter's, or one whose presenter is away."""
+    client = streamer.live.get(token)
+    if client is not None and client.audience is not None:
+        return client.audience
+    return next((a for a in streamer.away.values() if a.token == token), None)
+
+
 def end_live(client: "Client", streamer: Any, reason: str) -> None:
     audience = client.audience
     if audience is None:
@@ -408,8 +489,7 @@ async def viewer_endpoint(ws: WebSocket, streamer: Any, token: str, addr: str, r
     token's room too, which a load balancer that cannot take a token apart hashes by
     (docker/k8s/ingress-ws.yaml); one that is not the token's is refused."""
     cfg = streamer.settings
-    presenter = streamer.live.get(token) if TOKEN.fullmatch(token) else None
-    audience = presenter.audience if presenter is not None else None
+    audience = find_audience(streamer, token) if TOKEN.fullmatch(token) else None
     refusal = None
     if "&" in token:
         refusal = (NO_SUCH_CLOSE, "live= is given more than once: a live link has one token; open the link "
@@ -425,8 +505,9 @@ async def viewer_endpoint(ws: WebSocket, streamer: Any, token: str, addr: str, r
                    "(ask the presenter for it again)")
     elif len(audience.viewers) >= cfg.max_viewers:
         refusal = (1013, f"this live session has its most viewers ({cfg.max_viewers}); retry later")
-    elif sum(v.addr == addr for c in streamer.live.values() if c.audience
-             for v in c.audience.viewers.values()) >= cfg.max_viewers_per_client:
+    elif sum(v.addr == addr for a in [*(c.audience for c in streamer.live.values() if c.audience),
+                                      *streamer.away.values()]
+             for v in a.viewers.values()) >= cfg.max_viewers_per_client:
         refusal = (1013, f"this address watches the most live sessions it may ({cfg.max_viewers_per_client} "
                    "viewers, setting max_viewers_per_client); close one and retry")
     if refusal:
@@ -437,7 +518,7 @@ async def viewer_endpoint(ws: WebSocket, streamer: Any, token: str, addr: str, r
             pass
         return
     now = streamer.clock()
-    session = presenter.session
+    session = audience.session
     viewer = Viewer(uuid.uuid4().hex[:8], session, ws, addr)
     viewer.start(audience)
     await viewer.send_json({"type": "hello", "protocol": PROTOCOL, "session": session.id,
@@ -467,8 +548,9 @@ async def viewer_endpoint(ws: WebSocket, streamer: Any, token: str, addr: str, r
                                             "msg": f"over {cfg.messages_per_s:g} messages/s: messages are "
                                                    "dropped until the rate falls"})
                 continue
-            if presenter.audience is not audience:   # ended meanwhile: its messages go nowhere
+            if audience.ended:   # ended meanwhile: its messages go nowhere
                 break
+            session = audience.session   # its presenter's new one, when it came back
             try:
                 parsed = parse(data)
             except ProtocolError as exc:
@@ -494,6 +576,11 @@ async def viewer_endpoint(ws: WebSocket, streamer: Any, token: str, addr: str, r
                     await viewer.send_json({"type": "error", "loc": ["message", "type"],
                                             "msg": "only the presenter hands control over; a viewer with "
                                                    "control may give it back (to: null)"})
+            elif audience.away_since is not None and isinstance(parsed, STEERING):
+                await viewer.answer_error({"type": "error", "loc": ["message", "type"],
+                                           "msg": "the presenter's connection dropped: the look waits for it to "
+                                                  "come back (a few seconds)"},
+                                          int(isinstance(parsed, LOOK_CHANGES)), now)
             elif audience.controls(viewer):
                 await apply_change(session, parsed, viewer, audience.others(viewer), now)
                 streamer.wake()

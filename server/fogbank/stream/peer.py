@@ -34,7 +34,8 @@ def refused_answers(data: str | bytes) -> int:
         msg = json.loads(data)
     except (ValueError, RecursionError, UnicodeDecodeError):
         return 0
-    return int(isinstance(msg, dict) and msg.get("type") in LOOK_CHANGE_TYPES)
+    kind = msg.get("type") if isinstance(msg, dict) else None   # a list or an object is no type
+    return int(isinstance(kind, str) and kind in LOOK_CHANGE_TYPES)
 # the messages that steer the session: only whoever has control sends them (stream/live.py)
 STEERING = (*LOOK_CHANGES, PlayMsg, SpeedMsg, InteractMsg)
 

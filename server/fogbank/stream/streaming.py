@@ -83,8 +83,9 @@ FAIR_WAIT_S = 0.03
 # time, its frames take at least 1/5 of the worker while another session is always due
 # (at 2.5, the difference view beside a stream took enough to leave it 0.66 of its rate)
 FAIR_HOLD_FRAMES = 4.0
-# ... and only for a session whose frames take at most 1/this of its own: two looks of
-# like cost take turns by time, the worker never idle while one is due (see _hold_until)
+# ... and only while the worker would idle at most 1/this of the held frame's time (see
+# _hold_until): a loaded machine's stream of 45 ms frames was held for 15 ms ones due 30 ms
+# later, the worker a third idle
 FAIR_HOLD_RATIO = 4.0
 
 
@@ -127,6 +128,7 @@ class Streamer:
         self.clock = clock
         self.clients: OrderedDict[str, Client] = OrderedDict()
         self.live: dict[str, Client] = {}   # live sessions by their token (stream/live.py)
+        self.away: dict[str, live.Audience] = {}   # live sessions whose presenter is away, by its resume key
         self.frames: dict[int, int] = {}   # frames being made, by interactive worker index
         self._wake = asyncio.Event()
         self._tasks: list[asyncio.Task] = []
@@ -290,21 +292,21 @@ class Streamer:
     def _hold_until(c: Client, others, now: float) -> float | None:
         """Until when due `c` waits for a session on its worker that used less time and is
         due soon (`others`: (when due, its last frame's ms) of each; None: it goes now):
-        only a frame costlier than FAIR_FRAME_MS and FAIR_HOLD_RATIO times the other's,
-        that would still run when it is due, not a preview (a drag's change must show),
-        and for at most FAIR_HOLD_FRAMES of its frames' time at a stretch (1 s before one
-        is measured). Two cheap streams held each other for nothing: one of 10 ms frames
-        beside one at 60 frames a second drew 12 frames a second of its 30, the worker
-        idle; and on a loaded machine, a 640x360 stream whose frames took 45 ms was held
-        for a look's 15 ms ones, the worker idle a third of the time, and kept 0.32 of its
-        rate (tests/unit/test_streaming_scheduler.py)."""
+        only a frame costlier than FAIR_FRAME_MS that would still run when the other is
+        due, and only while the worker would idle at most 1/FAIR_HOLD_RATIO of that frame's
+        time waiting; not a preview (a drag's change must show); and for at most
+        FAIR_HOLD_FRAMES of its frames' time at a stretch (1 s before one is measured). Two
+        cheap streams held each other for nothing: one of 10 ms frames beside one at 60
+        frames a second drew 12 frames a second of its 30, the worker idle; and on a loaded
+        machine, a 640x360 stream whose frames took 45 ms was held for a look's 15 ms ones
+        due 30 ms later, the worker idle a third of the time: it kept 0.32 of its rate
+        (tests/unit/test_streaming_scheduler.py)."""
         last = c.session.last_ms
-        other_due = None
-        if last is not None and last > FAIR_FRAME_MS and not c.session.previewing(now):
-            other_due = min((due for due, ms in others if ms is None or last >= FAIR_HOLD_RATIO * ms),
-                            default=None)
-        elif last is None and not c.session.previewing(now):
-            other_due = min((due for due, _ in others), default=None)
+        if c.session.previewing(now) or (last is not None and last <= FAIR_FRAME_MS):
+            c.held_since = None
+            return None
+        wait = 1.0 if last is None else last / 1000.0 / FAIR_HOLD_RATIO
+        other_due = min((due for due, _ in others if due - now <= wait), default=None)
         if other_due is None or (last is not None and now + last / 1000.0 <= other_due):
             c.held_since = None
             return None
@@ -456,6 +458,7 @@ class Streamer:
         while True:
             await asyncio.sleep(min(1.0, cfg.idle_timeout_s / 4, cfg.ack_timeout_s / 4))
             now = self.clock()
+            live.expire_away(self, now)   # presenters that did not come back
             for c in list(self.clients.values()):
                 # a session with viewers is not idle while they watch (a class listening to
                 # its teacher over a paused look sends nothing); its viewers go with it
@@ -535,6 +538,7 @@ async def websocket_endpoint(ws: WebSocket, streamer: Streamer, renderer_info: d
     await ws.accept()
     addr = ws.client.host if ws.client else "?"
     query, room, token = live.split_live(ws.url.query)
+    query, resume = live.take_resume(query)
     if token is not None:   # a viewer of a live session: no session, no render of its own
         await live.viewer_endpoint(ws, streamer, token, addr, renderer_info, room)
         return
@@ -584,6 +588,9 @@ async def websocket_endpoint(ws: WebSocket, streamer: Streamer, renderer_info: d
         streamer.remove(client)
         raise
     log.info("session opened", extra={"session": session.id, "query": query})
+    if resume and live.resume_live(client, streamer, resume, now):   # its live session, back after a blip
+        await client.audience.tell()
+        streamer.wake()
     try:
         while True:
             data = await next_message(ws)
@@ -617,7 +624,7 @@ async def websocket_endpoint(ws: WebSocket, streamer: Streamer, renderer_info: d
         pass
     finally:
         streamer.remove(client)
-        live.end_live(client, streamer, "the presenter left")
+        live.presenter_left(client, streamer, streamer.clock())
         log.info("session closed", extra={"session": session.id, "frames": session.sent})
         if ws.client_state == WebSocketState.CONNECTED:
             try:
