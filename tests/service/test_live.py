@@ -66,6 +66,19 @@ def viewer(client, token):
     return ws, hello["live"]["id"]
 
 
+def refused(client, path, says, code):
+    """A viewer's connection to `path` is refused: an error about `live` whose message has
+    `says`, then close `code`."""
+    with client.websocket_connect(path) as w:
+        err = w.receive_json()
+        assert err["type"] == "error"
+        assert err["loc"] == ["live"]
+        assert says in err["msg"]
+        with pytest.raises(WebSocketDisconnect) as exc:
+            w.receive_json()
+        assert exc.value.code == code
+
+
 def test_a_shared_session_is_reached_by_its_room_and_viewers_get_its_own_frames(client):
     p = presenter(client)
     try:
@@ -167,14 +180,7 @@ def test_a_presenter_who_leaves_ends_the_session_for_its_viewers(resuming):
         assert exc.value.code == 4410
         assert 1.5 <= time.monotonic() - t0 <= 6.0
         # and the link now leads nowhere, said so
-        w = client.websocket_connect(f"/ws?live={token}")
-        with w:
-            err = w.receive_json()
-            assert err["loc"] == ["live"]
-            assert "no live session" in err["msg"]
-            with pytest.raises(WebSocketDisconnect) as exc:
-                w.receive_json()
-            assert exc.value.code == 4404
+        refused(client, f"/ws?live={token}", "no live session", 4404)
         # a viewer who saw the link cannot claim it by connecting with its room: a new
         # share has a new token, and the old link still leads nowhere
         q = presenter(client)
@@ -189,12 +195,7 @@ def test_a_presenter_who_leaves_ends_the_session_for_its_viewers(resuming):
 
 
 def test_a_bad_live_token_is_refused_with_a_reason(client):
-    with client.websocket_connect("/ws?live=%3Cscript%3E") as w:
-        err = w.receive_json()
-        assert err["type"] == "error" and err["loc"] == ["live"]
-        with pytest.raises(WebSocketDisconnect) as exc:
-            w.receive_json()
-        assert exc.value.code == 4404
+    refused(client, "/ws?live=%3Cscript%3E", "not a live link", 4404)
 
 
 def test_a_slow_viewer_skips_to_a_keyframe_without_slowing_the_others(client):
@@ -332,13 +333,7 @@ def test_a_live_link_given_twice_is_refused_with_a_reason(client):
     p = presenter(client)
     try:
         token = share(p)["token"]
-        with client.websocket_connect(f"/ws?live={token}&live={token}") as w:
-            err = w.receive_json()
-            assert err["loc"] == ["live"]
-            assert "more than once" in err["msg"]
-            with pytest.raises(WebSocketDisconnect) as exc:
-                w.receive_json()
-            assert exc.value.code == 4404
+        refused(client, f"/ws?live={token}&live={token}", "more than once", 4404)
     finally:
         p.__exit__(None, None, None)
 
@@ -358,13 +353,7 @@ def test_one_address_holds_at_most_max_viewers_per_client_viewers():
             token = share(p)["token"]
             first, _ = viewer(c, token)
             second, _ = viewer(c, token)
-            with c.websocket_connect(f"/ws?live={token}") as w:
-                err = w.receive_json()
-                assert err["loc"] == ["live"]
-                assert "max_viewers_per_client" in err["msg"]
-                with pytest.raises(WebSocketDisconnect) as exc:
-                    w.receive_json()
-                assert exc.value.code == 1013
+            refused(c, f"/ws?live={token}", "max_viewers_per_client", 1013)
             second.__exit__(None, None, None)
             read(p, until=lambda m: m["type"] == "audience" and m["viewers"] == 1)
             third, _ = viewer(c, token)
@@ -451,13 +440,7 @@ def test_a_viewer_whose_room_is_not_its_tokens_is_refused(client):
         token = share(p)["token"]
         with client.websocket_connect(f"/ws?live={token}&room={ROOM}") as w:
             assert w.receive_json()["type"] == "hello"
-        with client.websocket_connect(f"/ws?live={token}&room=another-room-of-16-chars") as w:
-            err = w.receive_json()
-            assert err["loc"] == ["live"]
-            assert "room=" in err["msg"]
-            with pytest.raises(WebSocketDisconnect) as exc:
-                w.receive_json()
-            assert exc.value.code == 4404
+        refused(client, f"/ws?live={token}&room=another-room-of-16-chars", "room=", 4404)
     finally:
         p.__exit__(None, None, None)
 
