@@ -75,6 +75,7 @@ def test_a_job_that_waits_too_long_is_abandoned():
             await sup.call(slot, worker.probe, deadline=0.2, queue_s=0.2)
         assert time.monotonic() - t0 < 1.5
         await busy
+        assert slot.finished >= t0   # the sleep's end is noted as progress (stalled())
         assert (await sup.call(slot, worker.probe, deadline=30))["ok"] is True
     run(body, Settings())
 

@@ -73,3 +73,30 @@ def test_a_thread_that_ends_does_not_take_back_its_progress():
     finally:
         os.kill(proc.pid, signal.SIGKILL)
         proc.wait(10)
+
+
+def _slot_with_flat_cpu(now: float, busy_for: float, finished_ago: float | None):
+    """A slot whose worker has had jobs in flight for `busy_for` s and used no CPU, sampled
+    each second, a job of which finished `finished_ago` s ago (None: none did)."""
+    from fogbank.workers.supervisor import Slot
+    slot = Slot(lane="interactive", index=0, pool=None)
+    slot.busy_since = now - busy_for
+    slot.finished = 0.0 if finished_ago is None else now - finished_ago
+    for k in range(6):
+        slot.cpu.append((now - 5 + k, 10.0, False))   # CPU seconds flat: no progress
+    return slot
+
+
+def test_a_job_that_just_finished_is_progress_not_a_stall():
+    """CI saw a worker that had run a 3 s sleep replaced as stalled in the moment between the
+    sleep's end and pebble marking the next queued job as running: the window of no
+    progress had begun with the sleep. A finished job restarts it."""
+    from fogbank.workers.supervisor import STALL_WINDOW_S, Supervisor
+    sup = object.__new__(Supervisor)
+    sup.info = {"renderer": "llvmpipe (LLVM 15.0.7, 256 bits)"}
+    now = 1000.0
+    assert sup.stalled(_slot_with_flat_cpu(now, 4.0, None), now) is True             # the control
+    assert sup.stalled(_slot_with_flat_cpu(now, 4.0, 0.2), now) is False
+    assert sup.stalled(_slot_with_flat_cpu(now, 4.0, STALL_WINDOW_S - 0.5), now) is False
+    # nothing for a whole window after the job finished: stalled again
+    assert sup.stalled(_slot_with_flat_cpu(now, 9.0, STALL_WINDOW_S + 0.5), now) is True

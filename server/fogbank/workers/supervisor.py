@@ -155,6 +155,9 @@ class Slot:
     cpu: deque = field(default_factory=lambda: deque(maxlen=256))
     progress: Progress = field(default_factory=lambda: Progress(None))   # of that process
     busy_since: float | None = None   # since when it has had jobs in flight (queued or running)
+    # when a job of its worker last finished: set by pebble's thread as it happens, since the
+    # caller's coroutine (which clears busy_since) may resume much later on a loaded machine
+    finished: float = 0.0
     generation: int = 0   # counts hard replacements: the jobs of a killed worker are lost
     down_since: float | None = None   # killed or replaced then, and not rendered since
 
@@ -295,6 +298,7 @@ class Supervisor:
         if not slot.inflight:
             slot.busy_since = t0
         slot.inflight.add(fut)
+        fut.add_done_callback(lambda _f: setattr(slot, "finished", time.monotonic()))
         generation = slot.generation   # a hard replacement under the job changes it
         try:
             # asyncio.wait, not wait_for: since Python 3.11 a wait_for timeout and pebble's
@@ -445,9 +449,14 @@ class Supervisor:
         progress over that time (under STALL_CPU_SHARE of a core run or waited for; a
         worker with a job is running it, or starting, which takes CPU too). On a GPU, only
         when it is stopped as well (STALL_CPU_SHARE's comment)."""
-        if slot.busy_since is None or now - slot.busy_since < STALL_WINDOW_S or not slot.cpu:
+        if slot.busy_since is None or not slot.cpu:
             return False
-        share = self.cpu_share(slot, now - STALL_WINDOW_S - 0.5, now)
+        # a job that finished is progress: the window starts there (a job that slept, then
+        # the next one not yet marked running by pebble, is not a stall)
+        since = max(slot.busy_since, slot.finished)
+        if now - since < STALL_WINDOW_S:
+            return False
+        share = self.cpu_share(slot, max(since, now - STALL_WINDOW_S - 0.5), now)
         if share is None or share >= STALL_CPU_SHARE:
             return False
         return self.cpu_renderer() or slot.cpu[-1][2]
