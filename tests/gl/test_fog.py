@@ -194,15 +194,15 @@ def test_held_fog_counts_against_the_cache_and_goes_with_its_session(renderer):
     fw, fh = h.sums.width, h.sums.height
     assert (fw, fh) == (W // still().effects.fog_scale, H // still().effects.fog_scale)
     # the sums, tauDirect (distance fog),
-    # the composite's inputs at full size (RGBA32UI + RGBA16F + RGBA16F: the bytes of the
-    # textures it made), and, where the scene pass
+    # the composite's inputs at full size (RGBA32UI + RGBA16F: the bytes of the textures it
+    # made), and, where the scene pass
     # has pixels with two surfaces, their tiles' places and masks (RG32I a 4x4 tile), list
     # (RG32I) and composite (RGBA8)
     listed = h.far_list.width * h.far_list.height if h.far_list is not None else 0
     tiles = -(-W // 4) * -(-H // 4)
     assert (h.far_count > 0) == f.gbuffer.two_surfaces
     inputs = sum(t.components * int(t.dtype[1:]) for t in h.inputs.color_attachments)
-    assert inputs == 16 + 8 + 8
+    assert inputs == 16 + 8
     assert h.nbytes() == (fw * fh * (16 + 4) + W * H * inputs
                           + (tiles * 8 + listed * (8 + 4) if f.gbuffer.two_surfaces else 0))
     assert f.gbuffer.nbytes() >= h.nbytes()

@@ -15,7 +15,7 @@ TEX = {"uColor": 0, "uInvDist": 1, "uFog": 2, "uParticles": 3, "uNoise": 4, "uSh
        "uRays": 6, "uImage": 0, "uSunLight": 7, "uFarColor": 8, "uFarInvDist": 9, "uFarSunLight": 10,
        "uTiles": 11, "uLightmap": 12, "uHeld": 13, "uHeldDirect": 14,
        "uHeldAB": 15, "uFarList": 16, "uHeldW": 17, "uEdges": 18, "uFarTiles": 19, "uFarOut": 20,
-       "uLightGrid": 21, "uSlices4": 22, "uHeldLight": 23, "uHeldHaze": 24,
+       "uLightGrid": 21, "uSlices4": 22, "uHeldLight": 23,
        # the warp (passes/warp.frag) reads the warp base, never the G-buffer it draws into
        "uBaseColor": 0, "uBaseInvDist": 1, "uBaseSunLight": 7, "uBaseOut": 25}
 

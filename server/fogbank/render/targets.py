@@ -38,10 +38,10 @@ HELD_LIGHT_BPS = 16
 HELD_FOG_BPP = 16
 HELD_DIRECT_BPP = 4
 # the held composite's inputs (passes/composite_inputs.frag), per pixel: A and B packed as
-# halves in an RGBA32UI, W in an RGBA16F and the sky's haze in another;
+# halves and the sky's bits in an RGBA32UI, W in an RGBA16F;
 # and, over a coarser fog, the depth24 that marks where it needs the depth-aware weights
 # (passes/held_edges.frag)
-HELD_INPUTS_BPP = 16 + 8 + 8
+HELD_INPUTS_BPP = 16 + 8
 HELD_EDGES_BPP = 4
 # the held composite's two-surface pixels (HeldFog.far_pixels): per SILHOUETTE_TILE tile an
 # RG32I (its first pixel's place in the list, a mask of its pixels listed), and per listed
@@ -260,9 +260,8 @@ class HeldFog:
 
     def composite_inputs(self, ctx: moderngl.Context, size: tuple[int, int]) -> moderngl.Framebuffer:
         if self.inputs is None:
-            # AB, W and the fog's sky haze per pixel (passes/composite_inputs.frag)
-            texs = [ctx.texture(size, 4, dtype="u4"), ctx.texture(size, 4, dtype="f2"),
-                    ctx.texture(size, 4, dtype="f2")]
+            # AB (with the sky's haze) and W per pixel (passes/composite_inputs.frag)
+            texs = [ctx.texture(size, 4, dtype="u4"), ctx.texture(size, 4, dtype="f2")]
             for t in texs:
                 t.filter = (moderngl.NEAREST, moderngl.NEAREST)
             self.inputs = ctx.framebuffer(color_attachments=texs)

@@ -18,7 +18,7 @@ from fogbank.render.programs import FULLSCREEN
 from fogbank.render.targets import FAR_LIST_WIDTH, SILHOUETTE_TILE
 
 BLUR_MODES = {"off": 0, "single": 1, "separate": 2}
-HELD_UNIFORMS = ("uFogColor", "uScatterColor", "uMaxOpacity", "uExposureScale")
+HELD_UNIFORMS = ("uFogColor", "uScatterColor", "uMaxOpacity", "uExposureScale", "uSkyAffect")
 # and with aerial perspective, the sky's share of the fog's colour (its haze per pixel is
 # kept: composite_held.glsl)
 HELD_AERIAL_UNIFORMS = ("uAerial",)
@@ -38,10 +38,11 @@ def blur_sigma(f) -> float:
 
 def held_inputs_key(f) -> tuple:
     """What the held composite's inputs depend on besides the held fog (and the scene pass
-    it was drawn over): the in-scattering lobe's effects, the sky's share of fog, and the
-    sky's haze (aerial perspective on or off, and the sky distance it depends on)."""
+    it was drawn over): the in-scattering lobe's effects and the sky's haze (aerial
+    perspective on or off, and the sky distance it depends on). The sky's share of fog is
+    read each frame."""
     e = f.still.effects
-    return (f.held_fog.key, e.phase, e.anisotropy, e.scatter_exponent, e.scatter_start, e.sky_affect,
+    return (f.held_fog.key, e.phase, e.anisotropy, e.scatter_exponent, e.scatter_start,
             e.aerial_perspective > 0, e.sky_distance)
 
 
@@ -106,7 +107,7 @@ class CompositePass(Pass):
             # the held composite reads only the colours and the max opacity per frame
             set_uniforms(prog, {k: uniforms[k] for k in held_names} if i < n_held else uniforms)
         if held:   # the held composite and, for the near surface, the two-surface draw
-            for name, tex in zip(("uHeldAB", "uHeldW", "uHeldHaze"), inputs.color_attachments):
+            for name, tex in zip(("uHeldAB", "uHeldW"), inputs.color_attachments):
                 tex.use(TEX[name])
         if mode == BLUR_MODES["single"]:
             g.mipmaps()   # the fused blur reads the scene's mip pyramid
@@ -252,7 +253,7 @@ class CompositePass(Pass):
                               SUN_LIGHT=defines["SUN_LIGHT"], AERIAL=defines["AERIAL"])
         set_uniforms(prog, {"uFwd": v.fwd, "uRight": v.right, "uUp": v.up, "uSunDir": look.sun.direction(),
                             "uScatterStart": e.scatter_start, "uSkyDistance": e.sky_distance,
-                            "uSkyAffect": e.sky_affect, "uScatterExponent": e.scatter_exponent,
+                            "uScatterExponent": e.scatter_exponent,
                             "uPhaseHG": e.phase == "henyey-greenstein", "uAnisotropy": e.anisotropy})
         g.color.use(TEX["uColor"])
         g.invdist.use(TEX["uInvDist"])

@@ -16,9 +16,17 @@ vec3 skyGradient(vec3 w) {
 // it: the horizon's colour), toward its mean over the upper hemisphere (up^0.55 averages
 // 1 / 1.55 over the hemisphere's solid angle) as `far` goes from 1 to 0: a fog near the eye
 // is lit by the whole sky, far off it takes the colour of the sky behind it.
+// It is mean + far (horizon - mean) + far up^0.55 (zenith - horizon): skyHazeOf rebuilds it
+// from (far, up^0.55) (a held composite keeps the two per pixel as bytes:
+// passes/composite_inputs.frag).
+const vec3 SKY_MEAN = mix(SKY_HORIZON, SKY_ZENITH, 1.0 / 1.55);
+
+vec3 skyHazeOf(float far, float up055) {
+    return SKY_MEAN + far * (SKY_HORIZON - SKY_MEAN) + (far * up055) * (SKY_ZENITH - SKY_HORIZON);
+}
+
 vec3 skyHaze(vec3 w, float far) {
-    vec3 sky = mix(SKY_HORIZON, SKY_ZENITH, pow(max(w.y, 0.0), 0.55));
-    return mix(mix(SKY_HORIZON, SKY_ZENITH, 1.0 / 1.55), sky, far);
+    return skyHazeOf(far, pow(max(w.y, 0.0), 0.55));
 }
 
 // A clear-sky gradient with a sun disk and glow, linear RGB. w: unit view direction,

@@ -27,7 +27,6 @@ uniform sampler2D uSunLight;      // the direct sunlight in the scene colour, li
 uniform sampler2D uFarColor;      // the pixel's far surface colour, linear; a: the near surface's coverage
 uniform sampler2D uFarInvDist;    // its 1/distance
 uniform sampler2D uFarSunLight;   // its direct sunlight, linear
-uniform float uSkyAffect;         // the share of its fog a sky pixel shows (Godot's sky affect)
 uniform float uBlurSigma;         // px at full fog
 uniform float uBlurExponent;
 #if COMPACT

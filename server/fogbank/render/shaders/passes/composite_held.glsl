@@ -4,11 +4,10 @@
 // sunlight move, blended by the kept upsample weights. Used by passes/composite_held.frag for every pixel, and by
 // the two-surface draw (passes/composite.frag HELD_NEAR) for the near surface.
 // Defined by the renderer: FOG_SCALE (1, 2, 4), SUN_LIGHT, AERIAL.
-uniform usampler2D uHeldAB;       // A and B as eight halves:
+uniform usampler2D uHeldAB;       // as seven halves and 16 bits:
                                   //   A (scene less direct sunlight, linear; in-scattering lobe)
-                                  //   B (direct sunlight, linear; the pixel's share of its fog)
+                                  //   B (direct sunlight, linear), the sky's bits (heldSkyBits)
 uniform sampler2D uHeldW;         // the four fog texels' upsample weights
-uniform sampler2D uHeldHaze;      // with AERIAL, the sky's haze along the pixel's ray (fogHaze)
 
 // The fog texels' (raw T, T toward the sun, in-scattered sunlight) at px by the kept weights.
 vec3 heldFogT(ivec2 px) {
@@ -37,15 +36,18 @@ vec3 heldFogTSmooth(ivec2 px) {
 vec4 heldNearOf(ivec2 px, vec3 Ts) {
     uvec4 ab = texelFetch(uHeldAB, px, 0);
     vec4 a = vec4(unpackHalf2x16(ab.x), unpackHalf2x16(ab.y));
-    vec4 b = vec4(unpackHalf2x16(ab.z), unpackHalf2x16(ab.w));
-    float T = 1.0 - b.a * (1.0 - fogFinish(Ts.x));   // the sky shows only its share of the fog
+    vec3 sun = vec3(unpackHalf2x16(ab.z), unpackHalf2x16(ab.w).x);
+    uint skyBits = ab.w >> 16;
+    float share = heldSky(skyBits) ? uSkyAffect : 1.0;
+    float T = 1.0 - share * (1.0 - fogFinish(Ts.x));   // the sky shows only its share of the fog
     vec3 scene = a.rgb;
 #if SUN_LIGHT
-    scene += Ts.y * b.rgb;   // the scene less the share 1 - T_sun of its direct sunlight
+    scene += Ts.y * sun;   // the scene less the share 1 - T_sun of its direct sunlight
 #endif
 #if AERIAL
     // the fog's colour depends on the view ray and the distance, both still: kept per pixel
-    vec3 ambient = fogAmbientOf(texelFetch(uHeldHaze, px, 0).rgb);
+    vec2 haze = heldHaze(skyBits);
+    vec3 ambient = fogAmbientOf(skyHazeOf(haze.x, haze.y));
 #else
     vec3 ambient = uFogColor;
 #endif

@@ -17,6 +17,7 @@ uniform float uScatterStart;      // m, Gawron's ScatterStartDist (eq. 5); 0 = t
 uniform bool uPhaseHG;            // the lobe: Henyey-Greenstein (true) or Gawron's power
 uniform float uAnisotropy;        // Henyey-Greenstein g
 uniform float uSkyDistance;       // m, how far a sky pixel's ray runs
+uniform float uSkyAffect;         // the share of its fog a sky pixel shows (Godot's sky affect)
 uniform vec3 uFogColor;           // linear: the fog's colour in shade (lit by the sky alone)
 uniform float uAerial;            // effects.aerial_perspective: the sky's share of the fog's colour
 uniform vec3 uScatterColor;       // sun colour * intensity * scatter colour * scatter strength
@@ -84,10 +85,31 @@ vec3 fogLight(float T, float Traw, float J, float lobe, vec3 ambient) {
 // the sky): its colour in that direction (common/sky.glsl skyHaze), blurred toward the
 // sky's mean for fog near the eye (Godot samples its sky's radiance at a mip by depth
 // likewise). The distant land and the sky just above the horizon then meet in the same
-// colour. A held composite keeps it per pixel (passes/composite_inputs.frag).
-vec3 fogHaze(vec3 w, float invd) {
+// colour. A held composite keeps its far share (fogHazeFar) and the ray's up^0.55 per pixel
+// (passes/composite_inputs.frag).
+float fogHazeFar(float invd) {
     float d = invd > 0.0 ? 1.0 / invd : uSkyDistance;
-    return skyHaze(w, clamp(d / uSkyDistance, 0.0, 1.0));
+    return clamp(d / uSkyDistance, 0.0, 1.0);
+}
+
+vec3 fogHaze(vec3 w, float invd) {
+    return skyHaze(w, fogHazeFar(invd));
+}
+
+// A held composite's 16 bits of the sky per pixel (passes/composite_inputs.frag): whether
+// it is the sky, and the haze's far share and its ray's up^0.55 (skyHazeOf) as bytes. The
+// low byte is 255 for the sky (whose far share is 1), else the far share in 254ths; the
+// high byte is up^0.55 in 255ths. A byte's rounding moves the haze by at most
+// 1/508 x |SKY_ZENITH - SKY_HORIZON| = 0.0009 (blue): under a quarter of an 8-bit level.
+uint heldSkyBits(bool sky, float far, float up055) {
+    uint f = sky ? 255u : uint(round(clamp(far, 0.0, 1.0) * 254.0));
+    return f | (uint(round(clamp(up055, 0.0, 1.0) * 255.0)) << 8);
+}
+
+// (whether the pixel is the sky, the far share, up^0.55) from heldSkyBits
+bool heldSky(uint bits) { return (bits & 255u) == 255u; }
+vec2 heldHaze(uint bits) {
+    return vec2(min(float(bits & 255u) / 254.0, 1.0), float(bits >> 8) / 255.0);
 }
 
 // The fog's colour lit by the sky, from the haze along its ray: uFogColor, and with aerial
