@@ -206,10 +206,16 @@ def _presets() -> dict[str, dict[str, Any]]:
                        "effects": lit(scatter=0.15),
                        "layers": [
                            {"kind": "height", "density": 0.006, "falloff": 0.08, "base": 0.0},
-                           {"kind": "box", "center": (bx, 3.0, bz - 25.0), "half_size": (14.0, 5.0, 45.0),
-                            "yaw": -12.0, "density": 0.07, "edge_fade": 0.8},
-                           {"kind": "ellipsoid", "center": (fx, fy + 6.0, fz), "radii": (38.0, 9.0, 24.0),
-                            "yaw": 30.0, "pitch": 6.0, "density": 0.16}]},
+                           # a fresh eye saw the box rise as a pillar with a vertical face, and
+                           # the ellipsoid as a lens on the canopy whose lower edge cut trees in
+                           # half: 9 m high at density 0.16, its opacity rose from 10% to 90%
+                           # of its peak across the lower edge within 0.9 degrees (11 px at
+                           # 720p; test_the_fog_ellipsoid_has_a_soft_lower_edge). Both now
+                           # larger, thinner and wholly faded: the ellipsoid's edge now rises over 2.7
+                           {"kind": "box", "center": (bx, 3.0, bz - 25.0), "half_size": (18.0, 9.0, 48.0),
+                            "yaw": -12.0, "density": 0.04, "edge_fade": 1.0},
+                           {"kind": "ellipsoid", "center": (fx, fy + 6.0, fz), "radii": (45.0, 20.0, 30.0),
+                            "yaw": 30.0, "pitch": 0.0, "density": 0.06}]},
         },
         "carved-clearing": {
             "title": "A clearing carved out of the fog",
