@@ -176,7 +176,15 @@ def _presets() -> dict[str, dict[str, Any]]:
                        "sun": {"azimuth": 120.0, "elevation": 30.0},
                        "fog_color": "#8c929a",
                        "effects": lit(scatter=0.3, anisotropy=0.3, aerial_perspective=0.0, shafts=1.0),
-                       "layers": [smoke]},
+                       # a plume that billows out as it rises: launched over a wider cone
+                       # (50 degrees), slower to give up its spread to the wind (drag 0.2),
+                       # more buoyant, living 9-18 s, denser (260 particles, opacity 0.85:
+                       # it still shades itself). A fresh eye saw the default's smoke here
+                       # as a tube of nearly constant width, a ribbon: its top fifth was 1.17
+                       # times as wide as its base, now 1.8-2.2 (320x180;
+                       # test_fischer_smoke_rises_spreads_and_moves)
+                       "layers": [{**smoke, "count": 260, "spread": 50.0, "speed": 2.0, "drag": 0.2, "alpha": 0.85,
+                                   "gravity": 0.8, "life_min": 30, "life_max": 60}]},
         },
         "perlin-fog": {
             "title": "Perlin fog, as an artist sets it up",
