@@ -100,3 +100,26 @@ def test_a_job_that_just_finished_is_progress_not_a_stall():
     assert sup.stalled(_slot_with_flat_cpu(now, 4.0, STALL_WINDOW_S - 0.5), now) is False
     # nothing for a whole window after the job finished: stalled again
     assert sup.stalled(_slot_with_flat_cpu(now, 9.0, STALL_WINDOW_S + 0.5), now) is True
+
+
+def test_a_cancelled_job_is_no_progress():
+    """A job's end is noted as progress from its future's done-callback, but not a job a
+    caller cancelled: callers giving up on a stopped worker's queue would otherwise restart
+    its window of no progress again and again."""
+    from concurrent.futures import Future
+
+    from fogbank.workers.supervisor import Slot
+    slot = Slot(lane="interactive", index=0, pool=None)
+    cancelled = Future()
+    cancelled.add_done_callback(slot.note_finished)
+    assert cancelled.cancel() is True
+    assert slot.finished == 0.0
+    done = Future()
+    done.add_done_callback(slot.note_finished)
+    done.set_result({"ok": True})
+    assert slot.finished > 0.0
+    failed = Future()
+    slot.finished = 0.0
+    failed.add_done_callback(slot.note_finished)
+    failed.set_exception(RuntimeError("the job raised"))
+    assert slot.finished > 0.0

@@ -161,6 +161,14 @@ class Slot:
     generation: int = 0   # counts hard replacements: the jobs of a killed worker are lost
     down_since: float | None = None   # killed or replaced then, and not rendered since
 
+    def note_finished(self, fut) -> None:
+        """A done-callback of each job's future (run by pebble's thread as the job ends):
+        a job that ran to a result or an error is the worker's progress (`finished`); one
+        cancelled (a caller gave up waiting for it) is not, or callers timing out on a
+        stopped worker would keep it from ever looking stalled."""
+        if not fut.cancelled():
+            self.finished = time.monotonic()
+
     def worker_pid(self) -> int | None:
         """The pid of the slot's worker process as its pool knows it now (a replaced
         worker's before its first job reports it), else the last one a job reported."""
@@ -298,7 +306,7 @@ class Supervisor:
         if not slot.inflight:
             slot.busy_since = t0
         slot.inflight.add(fut)
-        fut.add_done_callback(lambda _f: setattr(slot, "finished", time.monotonic()))
+        fut.add_done_callback(slot.note_finished)
         generation = slot.generation   # a hard replacement under the job changes it
         try:
             # asyncio.wait, not wait_for: since Python 3.11 a wait_for timeout and pebble's
