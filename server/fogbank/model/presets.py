@@ -283,7 +283,7 @@ def _presets() -> dict[str, dict[str, Any]]:
             # the eye 11 m over the ground, inside the haze: at 20 m (27 m up) the far haze
             # lay under it and its sunlit top stood as a cream stripe along the horizon,
             # 11.5 levels over the rows 8 px above and below (a fresh eye rejected it;
-            # test_no_stripe_at_the_horizon)
+            # test_no_bright_band_at_the_horizon)
             "params": {"camera": {"position": (40.0, 18.0, 20.0), "yaw": 45.0, "pitch": -4.0, "fov": 60.0},
                        "sun": {"azimuth": 45.0, "elevation": 12.0, "color": "#ffe2b8", "intensity": 3.0},
                        "fog_color": "#55606d",

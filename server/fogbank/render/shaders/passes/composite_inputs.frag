@@ -1,7 +1,7 @@
 // The held composite's inputs (render/passes/composite.py): for a stream whose camera
 // stays still, what passes/composite.frag computes per pixel from the scene pass and the
 // held fog (passes/fog.py), neither of which changes while time runs, drawn once:
-//   AB: two vec4 as eight halves (packHalf2x16) in one RGBA32UI texel, so that each frame
+//   AB: seven halves (packHalf2x16) and 16 bits in one RGBA32UI texel, so that each frame
 //       fetches them once (llvmpipe pays about 1 ms a fetch over a 1280x720 frame, little
 //       more for 16 bytes than for 8):
 //     A: (the scene colour less its direct sunlight with SUN_LIGHT, else the scene colour;
