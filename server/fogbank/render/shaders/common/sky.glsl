@@ -25,8 +25,13 @@ vec3 skyHazeOf(float far, float up055) {
     return SKY_MEAN + far * (SKY_HORIZON - SKY_MEAN) + (far * up055) * (SKY_ZENITH - SKY_HORIZON);
 }
 
+// up^0.55 of the unit direction w (0 below the horizon): the gradient's mix toward the zenith
+float skyHazeUp(vec3 w) {
+    return pow(max(w.y, 0.0), 0.55);
+}
+
 vec3 skyHaze(vec3 w, float far) {
-    return skyHazeOf(far, pow(max(w.y, 0.0), 0.55));
+    return skyHazeOf(far, skyHazeUp(w));
 }
 
 // A clear-sky gradient with a sun disk and glow, linear RGB. w: unit view direction,

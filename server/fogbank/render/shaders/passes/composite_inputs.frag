@@ -42,7 +42,7 @@ void main() {
 #endif
     vec4 a = vec4(scene - sun, scatterLobe(w, invd));
 #if AERIAL
-    uint skyBits = heldSkyBits(invd <= 0.0, fogHazeFar(invd), pow(max(w.y, 0.0), 0.55));
+    uint skyBits = heldSkyBits(invd <= 0.0, fogHazeFar(invd), skyHazeUp(w));
 #else
     uint skyBits = heldSkyBits(invd <= 0.0, 0.0, 0.0);
 #endif
