@@ -44,9 +44,9 @@ def draw_case(kind: str, rng, scale: str, rays: int) -> Case:
     fog = draw_look(kind, rng, scale)
     t = fog.time
     tex = bake(fog.noise.size, fog.noise.octaves, fog.noise.blur, fog.noise.seed)
-    states = {i: simulate(l, t, fog.wind.vector(), flat) for i, l in enumerate(fog.layers)
+    states = {i: simulate(l, t, fog.wind.vector(), flat, ages=True) for i, l in enumerate(fog.layers)
               if l.kind == "particles"}
-    extra = [p for pos, _ in states.values() for p in pos[:8]]
+    extra = [p for pos, *_ in states.values() for p in pos[:8]]
     O, W, D = draw_rays(fog, rng, rays, scale, extra)
     parts = [raw(fog, O[i], W[i], D[i], t, tex, states) for i in range(rays)]
     return Case(tune_density(fog, parts, rng), O, W, D, tex, states, parts)

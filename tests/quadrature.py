@@ -307,7 +307,7 @@ def tau_body(layer, fog, O, w, d, time):
 def carved_tau(fog, Os, w, ds, time, plain) -> float:
     """What the carving bodies take from the density layers along the segment: each body's
     carve / K times `plain` (the other density layers' optical depth) over each of its K
-    nested shells' chords, found here by bisection (box: half extents less (k + 1/2) / K of
+    nested shells' chords (the whole segment's less the pieces outside the chord), found here by bisection (box: half extents less (k + 1/2) / K of
     the fade depth, K = 4, or 1 without a fade; ellipsoid: r^2 <= 1 - f (k + 1/2) / K, K = 4)."""
     total = 0.0
     for layer in fog.layers:
@@ -324,7 +324,11 @@ def carved_tau(fog, Os, w, ds, time, plain) -> float:
         for inset in insets:
             chord = body_chord(layer, Ob, w, ds, inset)
             if chord is not None:
-                total += layer.carve / k_all * plain(Os + w * chord[0], w, chord[1] - chord[0])
+                # the ray's depth less the pieces outside the chord: the depth over the chord
+                # for every layer that integrates, and the stated rule for surface-mode noise
+                # (rho times a piece's length times the noise at its own end)
+                outside = sum(plain(Os + w * a, w, b - a) for a, b in ((0.0, chord[0]), (chord[1], ds)) if b > a)
+                total += layer.carve / k_all * (plain(Os, w, ds) - outside)
     return total
 
 
@@ -392,16 +396,19 @@ SIGNED = {"box": tau_body, "ellipsoid": tau_body}   # bodies: a carving one remo
 
 
 def particle_log_clarity(layer, state, O, w, d):
-    """Fischer: the log of the product over particles of 1 - alpha s clamp(1 - dist / R, 0, 1),
+    """Fischer: the log of the product over particles of 1 - alpha s clamp(1 - dist / R_j, 0, 1),
     dist from each particle to the segment (projected onto the line, clamped to [0, d]);
-    summed as logarithms (900 particles of clarity 0.25 multiply to 1e-538, below float64)."""
-    pos, strength = state
+    summed as logarithms (900 particles of clarity 0.25 multiply to 1e-538, below float64).
+    R_j: the radius R at birth, grown linearly with the particle's age a over its life to
+    growth R at its end: R (1 + (growth - 1) a)."""
+    pos, strength, age = state
     if len(pos) == 0:
         return 0.0
     rel = np.asarray(pos, dtype=np.float64) - O
     u = np.clip(rel @ w, 0.0, d)
     dist = np.linalg.norm(rel - u[:, None] * w[None, :], axis=1)
-    opacity = layer.alpha * np.asarray(strength) * np.clip(1.0 - dist / layer.radius, 0.0, 1.0)
+    R = layer.radius + (layer.growth * layer.radius - layer.radius) * np.asarray(age, dtype=np.float64)
+    opacity = layer.alpha * np.asarray(strength) * np.clip(1.0 - dist / R, 0.0, 1.0)
     with np.errstate(divide="ignore"):
         return float(np.sum(np.log1p(-opacity)))
 

@@ -228,15 +228,16 @@ def fog_texels(renderer, still):
 def test_particle_quads_match_the_reference_at_every_fog_texel(renderer):
     """The pass that draws particles in frames (instanced quads multiplied into the fog
     target) against the float64 product of the particles' clarities along each texel's
-    ray (hand-written camera), the particle state simulated independently of the renderer."""
+    ray (hand-written camera), the particle state simulated independently of the renderer;
+    the particles grow from 3 m at birth to 7.5 m at the end of their lives."""
     from fogbank.kinds.particle_motion import simulate
     from fogbank.scene import terrain
     still = calibration_still(time=4.0, density=1.3, layers=[
         {"kind": "particles", "count": 300, "emitter": (0.0, 1.0, -40.0), "spread": 70.0, "speed": 3.0,
-         "radius": 5.0, "alpha": 0.5, "life_min": 30, "life_max": 60}])
+         "radius": 3.0, "growth": 2.5, "alpha": 0.5, "life_min": 30, "life_max": 60}])
     T, eye, dirs, d = fog_texels(renderer, still)
     fog = still.fog()
-    state = simulate(fog.layers[0], fog.time, fog.wind.vector(), terrain.flat)
+    state = simulate(fog.layers[0], fog.time, fog.wind.vector(), terrain.flat, ages=True)
     want = reference(fog, eye, dirs, d, fog.time, states={0: state})
     err = np.abs(T - want)
     assert float(err.max()) <= 2e-4
@@ -254,11 +255,11 @@ def test_a_carved_frame_equals_its_rays_and_the_reference(renderer):
         {"kind": "homogeneous", "density": 0.01},
         {"kind": "ellipsoid", "center": (0.0, 4.0, -40.0), "radii": (18.0, 10.0, 14.0), "carve": 1.0},
         {"kind": "particles", "count": 200, "emitter": (0.0, 1.0, -40.0), "spread": 60.0, "speed": 2.0,
-         "radius": 4.0, "alpha": 0.6, "life_min": 30, "life_max": 60}])
+         "radius": 2.5, "growth": 2.0, "alpha": 0.6, "life_min": 30, "life_max": 60}])
     T, eye, dirs, d = fog_texels(renderer, still)
     fog = still.fog()
     rays = renderer.transmittance(fog, eye, dirs, d, np.full(len(d), fog.time))
-    state = simulate(fog.layers[2], fog.time, fog.wind.vector(), terrain.flat)
+    state = simulate(fog.layers[2], fog.time, fog.wind.vector(), terrain.flat, ages=True)
     want = reference(fog, eye, dirs, d, fog.time, states={2: state})
     assert float(np.abs(T - rays).max()) <= 2e-4
     assert float(np.abs(T - want).max()) <= 2e-4

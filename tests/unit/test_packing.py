@@ -26,16 +26,17 @@ LOOK = {"time": 2.5, "wind": {"speed": 3.0, "direction": 40.0}}
 
 
 def packed(layer):
-    """Everything a layer sends to the GPU: its uniform block, the particle rows and the
-    variant key, packed relative to an eye away from the origin, through the renderer's
-    own preparation (render/frame.py: simulation, cache and packing)."""
+    """Everything a layer sends to the GPU: its uniform block, the particle rows (positions
+    and strengths, radii) and the variant key, packed relative to an eye away from the
+    origin, through the renderer's own preparation (render/frame.py: simulation, cache and
+    packing)."""
     fog = FogParams.model_validate({**LOOK, "layers": [layer.model_dump()]})
     plan = plan_fog(fog, fog.time, (3.0, 7.0, -2.0), Simulations())
-    return plan.packed.data, plan.packed.particles, plan.key
+    return plan.packed.data, plan.packed.particles, plan.key, plan.packed.radii
 
 
 def differs(a, b) -> bool:
-    return a[2] != b[2] or not np.array_equal(a[0], b[0]) or not np.array_equal(a[1], b[1])
+    return a[2] != b[2] or any(not np.array_equal(x, y) for x, y in ((a[0], b[0]), (a[1], b[1]), (a[3], b[3])))
 
 
 def leaves(value, path=()):

@@ -35,7 +35,7 @@ def _by_pairs(fog, packed, ref, time, L, far) -> dict[int, float]:
                 rel = [pj - pi for pj, pi in zip(pts[j], pts[i])]
                 u = min(max(sum(a * b for a, b in zip(rel, L)), 0.0), far)
                 dist = math.dist(rel, [u * b for b in L])
-                opacity = float(v["alpha"]) * strength[j] * min(max(1.0 - dist / float(v["radius"]), 0.0), 1.0)
+                opacity = float(v["alpha"]) * strength[j] * min(max(1.0 - dist / float(packed.radii[j]), 0.0), 1.0)
                 log_clear += math.log1p(-min(opacity, 1.0 - 1e-12))
             tau = float(density_optical_depth(fog, np.array([pts[i]]), np.array([L]), np.array([far]),
                                               np.array([time]))[0])

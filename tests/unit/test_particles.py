@@ -25,14 +25,14 @@ def test_a_thinned_swarm_is_every_kth_particle_of_the_layers_own():
     fog = FogParams.model_validate({"layers": [LAYER]})
     sims = Simulations()
     t = 7.3
-    pos, strength = sims.state(fog.layers[0], t, fog)
+    pos, strength, age = sims.state(fog.layers[0], t, fog)
     assert len(pos) > 16
     for k in (1, 4, 16):
         thin = fog.layers[0].thinned(k)
         assert thin.model_dump_json() == fog.layers[0].model_dump_json()   # the URL's layer
         assert sims.state(thin, t, fog)[0] is pos                         # no new simulation
         look = fog.model_copy(update={"layers": [thin]})
-        packed = pack_layers(look, {0: (pos, strength)}, ref=(1.0, 2.0, 3.0), time=t)
+        packed = pack_layers(look, {0: (pos, strength, age)}, ref=(1.0, 2.0, 3.0), time=t)
         v = packed.values[0]
         want, want_s = pos[::k], strength[::k]
         far = np.argsort(-np.linalg.norm(want - np.array([1.0, 2.0, 3.0]), axis=1), kind="stable")
@@ -54,3 +54,27 @@ def test_thinning_is_not_a_field():
     assert "_stride" not in layer.model_dump() and "_stride" not in Particles.model_json_schema()["properties"]
     with pytest.raises(ValidationError):
         Particles.model_validate({**LAYER, "_stride": 4})
+
+
+def test_a_particle_grows_from_r_at_birth_to_growth_r_at_the_end_of_its_life():
+    """Each packed row's radius is R (1 + (growth - 1) a), a the particle's age over its
+    life: the state's ages agree with Fischer's strength (remaining life over life, faded
+    in over the first steps: s <= 1 - a, equal once faded in), and the rows, sorted
+    farthest first, carry their own particle's radius. growth 1 keeps every radius R."""
+    fog = FogParams.model_validate({"layers": [{**LAYER, "growth": 3.0}]})
+    t = 9.1
+    pos, strength, age = Simulations().state(fog.layers[0], t, fog)
+    assert np.all((age >= 0.0) & (age < 1.0))
+    assert np.all(strength <= 1.0 - age + 1e-12)
+    faded_in = np.isclose(strength, 1.0 - age, rtol=0, atol=1e-12)
+    assert int(faded_in.sum()) >= 0.9 * len(age)
+    assert float(age.min()) < 0.1 and float(age.max()) > 0.9   # young and old particles both
+    ref = np.array([1.0, 2.0, 3.0])
+    packed = pack_layers(fog, {0: (pos, strength, age)}, ref=tuple(ref), time=t)
+    v = packed.values[0]
+    far = np.argsort(-np.linalg.norm(pos - ref, axis=1), kind="stable")
+    rows = slice(v["first"], v["first"] + v["count"])
+    np.testing.assert_allclose(packed.radii[rows], 5.0 * (1.0 + 2.0 * age[far]), rtol=1e-6)
+    flat = FogParams.model_validate({"layers": [LAYER]})
+    packed = pack_layers(flat, {0: (pos, strength, age)}, ref=tuple(ref), time=t)
+    assert np.all(packed.radii[rows] == np.float32(5.0))

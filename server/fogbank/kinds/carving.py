@@ -9,7 +9,9 @@ the other layers' optical depth over it is their own closed form over that segme
 
     tau = tau_plain(0, d) - sum over bodies and shells of kappa / K tau_plain(s0, s1),
 
-exact. Only the density layers are carved (the direct ones, particles and distance fog,
+exact. The depth over a chord is taken as the whole ray's less the pieces outside it,
+as the shader does; for surface-mode noise, which is no integral (rho times a segment's
+length times the noise at the segment's end), that is the rule. Only the density layers are carved (the direct ones, particles and distance fog,
 are not densities); bodies that overlap remove their shares twice, and the total is kept
 at 0 or more (render/shaders/fog/transmittance.glsl fogDepths).
 """
@@ -30,15 +32,28 @@ def carved_depth(fog, O, omega, d, t, plain, env) -> np.ndarray:
     the rays (>= 0): `plain(O, omega, d)` is the other density layers' optical depth over
     segments (float64, the global density inside)."""
     out = np.zeros(len(d))
+    whole = None
     for layer in fog.layers:
         if not (layer.enabled and carving(layer)):
             continue
+        if whole is None:
+            whole = plain(O, omega, d, t)
         for share, s0, s1 in KINDS[layer.kind].shell_chords(layer, O, omega, d, t, env):
             inside = s1 > s0
             if not inside.any():
                 continue
+            # the whole ray's depth less what lies outside the chord, [0, s0] and [s1, d],
+            # as the shader takes it (kinds/packing.py carve_code): the same as the depth
+            # over [s0, s1] for every layer that integrates a segment, and the shader's own
+            # rule for surface-mode noise, which is no integral (rho times the segment's
+            # length times the noise at its end point: the pieces' ends are not the chord's)
+            kept = np.zeros(int(inside.sum()))
+            Oi, wi, ti = O[inside], omega[inside], t[inside]
+            for a, b in ((np.zeros_like(s0[inside]), s0[inside]), (s1[inside], d[inside])):
+                some = b > a
+                if some.any():
+                    kept[some] += plain(Oi[some] + wi[some] * a[some, None], wi[some], (b - a)[some], ti[some])
             seg = np.zeros(len(d))
-            seg[inside] = plain(O[inside] + omega[inside] * s0[inside, None], omega[inside],
-                                (s1 - s0)[inside], t[inside])
+            seg[inside] = whole[inside] - kept
             out += layer.carve * share * seg
     return out

@@ -152,6 +152,7 @@ class Packing:
     density: float
     states: dict
     particles: np.ndarray
+    radii: np.ndarray       # each particle row's radius, m (row 1's second channel)
     first_particle: int = 0
     index: int = -1        # the layer's index in fog.layers (its particle state's key)
 

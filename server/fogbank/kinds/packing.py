@@ -226,7 +226,7 @@ def direct_density(fog) -> float:
     return max(fog.density, FLT_MIN) if fog.density > 0 else 0.0
 
 
-def pack(fog, particle_states: dict[int, tuple[np.ndarray, np.ndarray]],
+def pack(fog, particle_states: dict[int, tuple[np.ndarray, ...]],
          ref=(0.0, 0.0, 0.0), time: float = 0.0):
     """Returns (uLayer data float32 (MAX_LAYERS*LAYER_VEC4, 4), particles float32
     (MAX_PARTICLES, 4)) for the enabled layers, in the order of `variant(fog)`."""
@@ -238,11 +238,12 @@ def pack(fog, particle_states: dict[int, tuple[np.ndarray, np.ndarray]],
 class Packed:
     data: np.ndarray          # uLayer, float32 (MAX_LAYERS * LAYER_VEC4, 4)
     particles: np.ndarray     # the particle texture's row, float32 (MAX_PARTICLES, 4)
+    radii: np.ndarray         # each particle row's radius (m), float32 (MAX_PARTICLES,)
     values: list[dict]        # each enabled layer's slot values (float64), in slot order
     kinds: list[str]          # each enabled layer's kind, in slot order
 
 
-def pack_layers(fog, particle_states: dict[int, tuple[np.ndarray, np.ndarray]],
+def pack_layers(fog, particle_states: dict[int, tuple[np.ndarray, ...]],
                 ref=(0.0, 0.0, 0.0), time: float = 0.0) -> Packed:
     """The enabled layers packed into uLayer by each kind's declared slots.
 
@@ -255,7 +256,8 @@ def pack_layers(fog, particle_states: dict[int, tuple[np.ndarray, np.ndarray]],
     so that a tiny global density over a huge optical depth is not lost to float32."""
     data = np.zeros((MAX_LAYERS * LAYER_VEC4, 4), np.float64)
     p = Packing(fog=fog, ref=np.asarray(ref, dtype=np.float64), time=time, density=fog.density,
-                states=particle_states, particles=np.zeros((MAX_PARTICLES, 4), np.float64))
+                states=particle_states, particles=np.zeros((MAX_PARTICLES, 4), np.float64),
+                radii=np.ones(MAX_PARTICLES, np.float64))
     values, kinds = [], []
     for n, (i, layer) in enumerate(enabled(fog)):
         kind = KINDS[layer.kind]
@@ -264,7 +266,8 @@ def pack_layers(fog, particle_states: dict[int, tuple[np.ndarray, np.ndarray]],
         kind.layout.write(data[n * LAYER_VEC4:(n + 1) * LAYER_VEC4], v)
         values.append(v)
         kinds.append(layer.kind)
-    return Packed(data.astype(np.float32), p.particles.astype(np.float32), values, kinds)
+    return Packed(data.astype(np.float32), p.particles.astype(np.float32), p.radii.astype(np.float32), values,
+                  kinds)
 
 
 def uses_noise(fog) -> bool:

@@ -32,7 +32,7 @@ def particle_light(fog, packed, ref, time: float, sun_dir, sun_distance: float) 
         return out
     rows = np.concatenate([np.arange(int(v["first"]), int(v["first"] + v["count"])) for v in swarms])
     alpha = np.concatenate([np.full(int(v["count"]), float(v["alpha"])) for v in swarms])
-    radius = np.concatenate([np.full(int(v["count"]), float(v["radius"])) for v in swarms])
+    radius = packed.radii[rows].astype(np.float64)
     data = packed.particles[rows].astype(np.float64)
     pos = data[:, :3] + np.asarray(ref, dtype=np.float64)
     strength = data[:, 3]

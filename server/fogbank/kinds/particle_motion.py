@@ -123,11 +123,12 @@ TRAJECTORIES = Trajectories()
 
 def simulate(layer, t: float, wind: np.ndarray,
              ground: Callable[[np.ndarray, np.ndarray], np.ndarray],
-             cache: Trajectories | None = TRAJECTORIES) -> tuple[np.ndarray, np.ndarray]:
+             cache: Trajectories | None = TRAJECTORIES, ages: bool = False) -> tuple[np.ndarray, ...]:
     """Positions (M, 3) and strengths s_j = remaining life / initial life (M,) of the
     particles alive at time t, faded in over their first FADE_IN_STEPS steps. M <= count.
-    With `cache`, each particle alive at the layer's last simulated time continues from
-    where it stopped (None: every particle from its birth)."""
+    With `ages`, also each one's age over its life, in [0, 1) (M,). With `cache`, each
+    particle alive at the layer's last simulated time continues from where it stopped
+    (None: every particle from its birth)."""
     n = layer.count
     period = layer.life_max
     slots = np.arange(n, dtype=np.int64)
@@ -139,7 +140,7 @@ def simulate(layer, t: float, wind: np.ndarray,
         uniform(layer.seed, slots, cycle, 0) * (layer.life_max - layer.life_min + 1))
     alive = age < life   # cycles before t = 0 count too: the emitter is warm at t = 0
     if not np.any(alive):
-        return np.zeros((0, 3)), np.zeros(0)
+        return (np.zeros((0, 3)), np.zeros(0)) + ((np.zeros(0),) if ages else ())
     slots, cycle, age, life = slots[alive], cycle[alive], age[alive], life[alive]
 
     direction = _cone(np.asarray(layer.direction, dtype=np.float64),
@@ -199,4 +200,4 @@ def simulate(layer, t: float, wind: np.ndarray,
     # pops into view (fischer-smoke: 0.80 of T between frames 0.1 s apart); it fades in
     # over its first FADE_IN_STEPS steps instead (docs/departures.md)
     strength = (life - age) / life * np.minimum(1.0, age / FADE_IN_STEPS)
-    return pos, strength
+    return (pos, strength, age / life) if ages else (pos, strength)

@@ -1,4 +1,5 @@
-// Fischer, "Clouds, Fog, and Smoke": one particle at p (m) of radius R (m), strength s
+// Fischer, "Clouds, Fog, and Smoke": one particle at p (m) of radius R (m: R_j, grown
+// with its age, kinds/particles.py radii), strength s
 // (remaining life / initial life) and max opacity alpha, seen along the segment
 // O -> O + w d. Its opacity is alpha s clamp(1 - dist / R, 0, 1) and its clarity (its
 // transmittance) 1 - opacity, dist the distance from p to the segment (Bourke: project

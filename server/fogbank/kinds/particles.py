@@ -1,4 +1,5 @@
-"""Particle fog (Fischer): T = prod_j (1 - alpha s_j clamp(1 - dist_j / R, 0, 1))."""
+"""Particle fog (Fischer): T = prod_j (1 - alpha s_j clamp(1 - dist_j / R_j, 0, 1)), each
+particle's radius R_j growing over its life from R to `growth` R (R_j = R: Fischer's)."""
 
 from __future__ import annotations
 
@@ -32,7 +33,10 @@ class Particles(LayerBase):
     life_min: Int = Field(64, ge=1, le=1000, description="shortest life, steps")
     life_max: Int = Field(128, ge=1, le=1000, description="longest life, steps")
     step: float = num(0.1, 0.005, 10, 0.005, "s", "simulation step", gt=True)
-    radius: float = num(4.0, 0.01, 100, 0.1, "m", "one particle's radius R", gt=True, title="radius R")
+    radius: float = num(4.0, 0.01, 100, 0.1, "m", "one particle's radius R (at birth)", gt=True, title="radius R")
+    growth: float = num(1.0, 1.0, 10.0, 0.1, "", "a particle's radius at the end of its life, in R, grown "
+                        "linearly with age: smoke that widens as it rises (1: Fischer's constant radius)",
+                        title="growth")
     alpha: float = num(0.2, 0, 1, 0.01, "", "max opacity of one particle (0.2 fog, ~1 smoke)", title="opacity α")
     gravity: float = num(0.0, -20, 20, 0.1, "m/s^2", "upward acceleration (negative falls)")
     drag: float = num(0.5, 0, 10, 0.05, "1/s", "relaxation of velocity toward the wind")
@@ -72,14 +76,22 @@ def segment_distance(p, O, omega, d):
     return np.linalg.norm(closest, axis=2)
 
 
+def radii(layer, age: np.ndarray) -> np.ndarray:
+    """Each particle's radius R_j (m) from its age over its life, in [0, 1): R at birth,
+    growing linearly to `growth` R. A smoke puff widens as it rises and mixes with the air;
+    its strength (Fischer's remaining life) already thins it as it goes."""
+    return layer.radius * (1.0 + (layer.growth - 1.0) * np.asarray(age, dtype=np.float64))
+
+
 def log_transmittance_of(layer, state, O, omega, d):
     """log T, summed over particles as logarithms (a product of many clarities underflows
-    float64: 900 of 0.25 is 1e-538), -inf where a particle is opaque."""
-    pos, strength = state
+    float64: 900 of 0.25 is 1e-538), -inf where a particle is opaque. `state`: positions,
+    strengths and ages over life (simulate_state)."""
+    pos, strength, age = state
     if len(pos) == 0:
         return np.zeros(len(d))
     dist = segment_distance(pos, O, omega, d)
-    opacity = layer.alpha * strength[None, :] * np.clip(1.0 - dist / layer.radius, 0.0, 1.0)
+    opacity = layer.alpha * strength[None, :] * np.clip(1.0 - dist / radii(layer, age)[None, :], 0.0, 1.0)
     with np.errstate(divide="ignore"):
         return np.sum(np.log1p(-opacity), axis=1)
 
@@ -93,23 +105,26 @@ def pack(layer, p):
     # layer's first row; the block says where they are. Farthest from E first: the quads
     # pass composites each particle's light over what lies behind it, back to front
     # (render/shaders/passes/particles.frag); a product of clarities has no order.
-    pos, strength = p.states[p.index]
+    pos, strength, age = p.states[p.index]
     k = layer._stride
-    pos, strength = pos[::k], strength[::k]
+    pos, strength, age = pos[::k], strength[::k], age[::k]
     order = np.argsort(-np.linalg.norm(pos - p.ref, axis=1), kind="stable")
-    pos, strength = pos[order], strength[order]
+    pos, strength, age = pos[order], strength[order], age[order]
     first, count = p.first_particle, len(pos)
     p.particles[first:first + count, :3] = pos - p.ref
     p.particles[first:first + count, 3] = strength
+    p.radii[first:first + count] = radii(layer, age)
     p.first_particle += count
-    return {"alpha": min(1.0, layer.alpha * k), "radius": layer.radius, "first": first, "count": count}
+    return {"alpha": min(1.0, layer.alpha * k), "first": first, "count": count}
 
 
 def code(r, variant):
-    # one particle per texel of uParticles; the fog pass leaves this to the quads pass
+    # one particle per texel of uParticles (row 0: position and strength; row 1's second
+    # channel: its radius); the fog pass leaves this to the quads pass
     return (f"for (int j = 0; j < int({r.count}); ++j) {{ "
             f"vec4 q = texelFetch(uParticles, ivec2(int({r.first}) + j, 0), 0); "
-            f"tauDirect += directDepth(particleOpacity(Os, w, ds, q.xyz, {r.radius}, q.w, {r.alpha}), "
+            f"float Rj = texelFetch(uParticles, ivec2(int({r.first}) + j, 1), 0).g; "
+            f"tauDirect += directDepth(particleOpacity(Os, w, ds, q.xyz, Rj, q.w, {r.alpha}), "
             f"uDensity); }}")
 
 
@@ -122,6 +137,7 @@ def sample(rng):
     return Particles(count=int(rng.integers(1, 200)), emitter=tuple(rng.normal(size=3) * 5), emitter_size=size,
                      direction=tuple(rng.normal(size=3)), spread=rng.uniform(0, 90),
                      speed=rng.uniform(0, 3), radius=rng.uniform(1, 8), alpha=rng.uniform(0, 1),
+                     growth=1.0 if rng.random() < 0.5 else rng.uniform(1, 4),
                      life_min=8, life_max=int(rng.integers(8, 64)), step=rng.uniform(0.05, 0.5),
                      seed=int(rng.integers(0, 1000)), wind=bool(rng.random() < 0.5))
 
@@ -131,11 +147,12 @@ PARTICLE_SIM_S = 0.5             # simulating 1024 particles of life 128 steps, 
 
 
 def simulate_state(layer, time: float, fog):
-    """Fischer's particles at `time` over the look's ground (kinds/particle_motion.py)."""
+    """Fischer's particles at `time` over the look's ground (kinds/particle_motion.py):
+    positions, strengths and ages over life."""
     from fogbank.kinds.particle_motion import simulate
     from fogbank.scene import terrain
     ground = terrain.flat if fog.scene == "calibration" else terrain.height
-    return simulate(layer, time, fog.wind.vector(), ground)
+    return simulate(layer, time, fog.wind.vector(), ground, ages=True)
 
 
 def sim_seconds(layer) -> float:
@@ -143,16 +160,18 @@ def sim_seconds(layer) -> float:
 
 
 def extra_seconds(layer, fog_mpx):
-    cover = min(max((layer.radius / 20.0) ** 2, 0.05), 16.0)
+    # a particle's quad at its mean radius over life, (1 + growth) / 2 R
+    cover = min(max((layer.radius * (1.0 + layer.growth) / 2.0 / 20.0) ** 2, 0.05), 16.0)
     return PARTICLE_S_PER_MPX * layer.drawn * cover * fog_mpx + sim_seconds(layer)
 
 
 KIND = Kind(
     model=Particles,
-    layout=Layout("particles", ("alpha", 1), ("radius", 1), ("first", 1), ("count", 1)),
+    layout=Layout("particles", ("alpha", 1), ("first", 1), ("count", 1)),
     pack=pack, code=code, sample=sample, log_transmittance=reference,
     quads=True, seconds_per_mpx=0.0, extra_seconds=extra_seconds,
     simulate=simulate_state, simulate_seconds=sim_seconds,
-    describe=lambda layer: f"particles, {layer.count} of radius {layer.radius:g} m",
+    describe=lambda layer: f"particles, {layer.count} of radius {layer.radius:g} m"
+                           + (f" growing to {layer.radius * layer.growth:g} m" if layer.growth != 1.0 else ""),
     jit_units=lambda variant: 0.0,
 )

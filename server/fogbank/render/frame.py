@@ -78,20 +78,21 @@ def plan_fog(fog, time: float, ref, sims: Simulations, split: bool = False, ligh
     with `light` (a frame's, of a lit look), each particle's share of the sunlight, through
     the `whole` look's fog (a split half's particles are lit through every layer, not
     only their half's: the moving half's smoke was lit as if no static fog stood toward the sun).
-    `whole`: (the whole look, its packed particles, their light): a half whose particle
-    rows are the whole's takes their light as it is (computed once a frame)."""
+    `whole`: (the whole look, its packed particles, their light, their radii): a half whose
+    particle rows are the whole's takes their light as it is (computed once a frame)."""
     states = {i: sims.state(l, time, fog) for i, l in enabled(fog) if KINDS[l.kind].simulate}
     e = fog.effects
     n = fog.noise
     packed = pack_layers(fog, states, ref, time)
     lights = None
     if light and e.lit and states:
-        if whole is not None and np.array_equal(packed.particles, whole[1]):
+        if (whole is not None and np.array_equal(packed.particles, whole[1])
+                and np.array_equal(packed.radii, whole[3])):
             lights = whole[2]
         else:
             lights = particle_light(fog if whole is None else whole[0], packed, ref, time,
                                     fog.sun.direction(), e.sky_distance)
-    halves = tuple(plan_fog(part, time, ref, sims, light=light, whole=(fog, packed.particles, lights))
+    halves = tuple(plan_fog(part, time, ref, sims, light=light, whole=(fog, packed.particles, lights, packed.radii))
                    for part in split_by_time(fog)) if split else None
     return FogPlan(
         key=variant(fog),

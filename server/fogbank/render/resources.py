@@ -268,7 +268,8 @@ class NoiseTiles:
 
 def particle_texture(ctx) -> moderngl.Texture:
     """Two rows: (x, y, z, strength) per particle, relative to the draw's reference point;
-    (its share of the sunlight, 0, 0, 0) (kinds/particle_light.py; 1 for unlit looks)."""
+    (its share of the sunlight, its radius in m, 0, 0) (kinds/particle_light.py: 1 for unlit
+    looks; kinds/particles.py radii)."""
     tex = ctx.texture((MAX_PARTICLES, 2), 4, dtype="f4")
     tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
     return tex

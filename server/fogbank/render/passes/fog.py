@@ -33,6 +33,7 @@ def bind_fog(r, prog, plan) -> None:
         r.particles.write(plan.packed.particles.tobytes(), viewport=(0, 0, MAX_PARTICLES, 1))
         light = np.zeros((MAX_PARTICLES, 4), np.float32)
         light[:, 0] = 1.0 if plan.particle_light is None else plan.particle_light
+        light[:, 1] = plan.packed.radii
         r.particles.write(light.tobytes(), viewport=(0, 1, MAX_PARTICLES, 1))
     r.particles.use(TEX["uParticles"])
     (r.noise.get(plan.noise) if plan.noise else r.noise.none()).use(TEX["uNoise"])

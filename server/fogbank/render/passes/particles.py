@@ -51,8 +51,7 @@ class ParticlesPass(Pass):
             for _, s in swarms:
                 if s["count"] < 1:
                     continue
-                set_uniforms(prog, {"uFirst": int(s["first"]), "uRadius": float(s["radius"]),
-                                    "uAlpha": float(s["alpha"])})
+                set_uniforms(prog, {"uFirst": int(s["first"]), "uAlpha": float(s["alpha"])})
                 r.programs.draw(prog, moderngl.TRIANGLE_STRIP, vertices=4, instances=int(s["count"]))
         finally:
             r.ctx.blend_func = moderngl.DEFAULT_BLENDING

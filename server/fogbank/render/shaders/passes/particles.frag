@@ -22,12 +22,12 @@
 #endif
 flat in vec4 vParticle;
 flat in float vLight;
+flat in float vRadius;            // m (passes/particles.vert)
 uniform sampler2D uInvDist;
 uniform vec3 uFwd, uRight, uUp;
 uniform float uSkyDistance;
 uniform float uStartDistance;
 uniform float uCutoffDistance;
-uniform float uRadius;
 uniform float uAlpha;
 uniform float uDensity;           // global density: clarity -> clarity^density
 layout(location = 0, index = 0) out vec4 fColor;
@@ -41,7 +41,7 @@ void main() {
         vec3 Os = ft.w * uStartDistance;   // relative to the eye, as the particles are
         float ds = max(d - uStartDistance, 0.0);
         // clarity^density, as exp(density log(1 - opacity)) (fog/transmittance.glsl)
-        c = exp(-directDepth(particleOpacity(Os, ft.w, ds, vParticle.xyz, uRadius,
+        c = exp(-directDepth(particleOpacity(Os, ft.w, ds, vParticle.xyz, vRadius,
                                              vParticle.w, uAlpha), uDensity));
 #if LIGHT
         float u = uStartDistance + clamp(dot(vParticle.xyz - Os, ft.w), 0.0, ds);

@@ -1,17 +1,18 @@
 // Particle quads (Fischer's particles drawn as screen-space quads, so the cost follows
 // the pixels a particle can touch rather than particles x pixels): one instance per
-// particle, a quad over the screen bounds of its sphere of influence (radius R). A pixel
-// outside them has its segment farther than R from the particle: clarity 1 there.
+// particle, a quad over the screen bounds of its sphere of influence (its radius R_j, row 1
+// of uParticles: kinds/particles.py radii). A pixel outside them has its segment farther
+// than R_j from the particle: clarity 1 there.
 // With LIGHT, also the particle's share of the sunlight: what the fog and the other
 // particles leave of it (row 1 of uParticles, kinds/particle_light.py), times, with
 // SHADOW, how much of the particle the scene's shadow map lights (weighted by uShafts).
-uniform sampler2D uParticles;     // row 0: (x, y, z relative to the eye, strength); row 1: (sunlight share, 0, 0, 0)
+uniform sampler2D uParticles;     // row 0: (x, y, z relative to the eye, strength); row 1: (sunlight share, R_j in m, 0, 0)
 uniform vec3 uEye;                // m
 uniform int uFirst;               // this layer's first particle
-uniform float uRadius;            // m
 uniform mat4 uViewProj;
 flat out vec4 vParticle;
 flat out float vLight;
+flat out float vRadius;           // m
 #if SHADOW
 uniform sampler2DShadow uShadow;  // the sun's depth map (compare: 1 = lit)
 uniform mat4 uSunViewProj;        // world -> the sun's clip space
@@ -20,10 +21,10 @@ uniform float uShafts;            // how much the scene's shadows take from the 
 
 // the share of the particle's sphere the sun lights: its centre and four points half a
 // radius out across the sun's view, each outside the map lit
-float particleShadow(vec3 c) {
+float particleShadow(vec3 c, float R) {
     float lit = 0.0;
     for (int i = 0; i < 5; ++i) {
-        vec2 o = i == 0 ? vec2(0.0) : 0.5 * uRadius * vec2(i == 1 ? 1.0 : (i == 2 ? -1.0 : 0.0),
+        vec2 o = i == 0 ? vec2(0.0) : 0.5 * R * vec2(i == 1 ? 1.0 : (i == 2 ? -1.0 : 0.0),
                                                            i == 3 ? 1.0 : (i == 4 ? -1.0 : 0.0));
         vec3 q = (uSunViewProj * vec4(c + vec3(o.x, 0.0, o.y), 1.0)).xyz * 0.5 + 0.5;
         bool inside = all(greaterThanEqual(q, vec3(0.0))) && all(lessThanEqual(q, vec3(1.0)));
@@ -37,14 +38,16 @@ float particleShadow(vec3 c) {
 void main() {
     vec4 q = texelFetch(uParticles, ivec2(uFirst + gl_InstanceID, 0), 0);
     vParticle = q;
-    vLight = texelFetch(uParticles, ivec2(uFirst + gl_InstanceID, 1), 0).r;
+    vec2 lr = texelFetch(uParticles, ivec2(uFirst + gl_InstanceID, 1), 0).rg;
+    vLight = lr.x;
+    vRadius = lr.y;
 #if SHADOW
-    vLight *= particleShadow(uEye + q.xyz);
+    vLight *= particleShadow(uEye + q.xyz, vRadius);
 #endif
     vec2 lo = vec2(1e9), hi = vec2(-1e9);
     bool behind = false;
     for (int i = 0; i < 8; ++i) {    // the corners of the sphere's bounding cube
-        vec3 c = uEye + q.xyz + uRadius * vec3((i & 1) == 0 ? -1.0 : 1.0, (i & 2) == 0 ? -1.0 : 1.0,
+        vec3 c = uEye + q.xyz + vRadius * vec3((i & 1) == 0 ? -1.0 : 1.0, (i & 2) == 0 ? -1.0 : 1.0,
                                         (i & 4) == 0 ? -1.0 : 1.0);
         vec4 clip = uViewProj * vec4(c, 1.0);
         // a corner at or behind the eye plane: the sphere may cover anything
