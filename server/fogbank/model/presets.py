@@ -169,22 +169,27 @@ def _presets() -> dict[str, dict[str, Any]]:
         "fischer-smoke": {
             "title": "Fischer: chimney smoke",
             "source": "Cameron Fischer, Clouds, Fog, and Smoke",
-            "description": "Smoke from 160 particles out of the house's chimney, rising warm and "
-                           "spreading as it goes, bent over by the wind: dark where it is thick "
-                           "(it shades itself), lit on the sun's side.",
-            "params": {"camera": house_view, "time": 12.0, "wind": {"direction": 80.0, "speed": 2.5},
+            "description": "Wood smoke from 140 particles out of the house's chimney, each "
+                           "born thin and widening seven times over its life, rising warm and "
+                           "bent over by the wind: grey and dark where it is thick (it shades "
+                           "itself), lit on the sun's side, thinning out as it drifts off.",
+            "params": {"camera": {**house_view, "yaw": 35.0, "pitch": -4.0}, "time": 12.0,
+                       "wind": {"direction": 80.0, "speed": 3.0},
                        "sun": {"azimuth": 120.0, "elevation": 30.0},
-                       "fog_color": "#8c929a",
+                       "fog_color": "#6f747c",
                        "effects": lit(scatter=0.3, anisotropy=0.3, aerial_perspective=0.0, shafts=1.0),
-                       # a plume that billows out as it rises: launched over a wider cone
-                       # (50 degrees), slower to give up its spread to the wind (drag 0.2),
-                       # more buoyant, living 9-18 s, denser (260 particles, opacity 0.85:
-                       # it still shades itself). A fresh eye saw the default's smoke here
-                       # as a tube of nearly constant width, a ribbon: its top fifth was 1.17
-                       # times as wide as its base, now 1.8-2.2 (320x180;
-                       # test_fischer_smoke_rises_spreads_and_moves)
-                       "layers": [{**smoke, "count": 260, "spread": 50.0, "speed": 2.0, "drag": 0.2, "alpha": 0.85,
-                                   "gravity": 0.8, "life_min": 30, "life_max": 60}]},
+                       # A fresh eye saw the smoke as steam (brighter than the sky behind
+                       # it), no chimney (the smoke's first puff hid it), a blob over the
+                       # roof, cotton-ball puffs, rising straight out of the frame. Each
+                       # particle is now born 0.8 m wide and grows to 5.6 m (growth 7: the
+                       # plume widens as it goes instead of starting at its full width),
+                       # fewer and more opaque (140, 0.8: it keeps lumps), greyer (the fog
+                       # colour is the smoke's), lives 6-15 s and is bent by a 3 m/s wind,
+                       # framed so that the whole plume stays in view
+                       # (test_fischer_smoke_reads_as_smoke_from_a_chimney)
+                       "layers": [{**smoke, "count": 140, "alpha": 0.8, "radius": 0.55, "growth": 10.0,
+                                   "spread": 25.0, "life_min": 20, "life_max": 50, "speed": 2.5,
+                                   "drag": 0.45, "gravity": 0.7}]},
         },
         "perlin-fog": {
             "title": "Perlin fog, as an artist sets it up",
