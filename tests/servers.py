@@ -156,7 +156,9 @@ class Nginx:
     def __init__(self, upstreams: list[int], read_timeout_s: int | None = None, ingress: bool = False):
         """`read_timeout_s`: the config's proxy_read_timeout values replaced by this (a
         test of failover need not wait the 65 s the app's longest answer needs).
-        `ingress`: instead of fogbank.conf, the Kubernetes ingresses' routing (ingress_http)."""
+        `ingress`: instead of fogbank.conf, the Kubernetes ingresses' routing (ingress_http).
+        Without `ingress`, the access log gives each request's $request_uri and the key the
+        upstream is hashed by ($fogbank_route), tab-separated (routes())."""
         self.port = free_port()
         self.url = f"http://127.0.0.1:{self.port}"
         self.dir = Path(tempfile.mkdtemp(prefix="fogbank-nginx-"))
@@ -171,6 +173,8 @@ class Nginx:
         (d / "listen.conf").write_text(f"listen 127.0.0.1:{self.port};\n")
         body = ingress_http(servers) if ingress else (
             f"    upstream fogbank {{\n        hash $fogbank_route;\n{servers}\n    }}\n    include {conf};")
+        log = (f"    access_log {d}/access.log;" if ingress else
+               f"    log_format route '$request_uri\\t$fogbank_route';\n    access_log {d}/access.log route;")
         (d / "nginx.conf").write_text(f"""
 daemon off;
 worker_processes 1;
@@ -178,16 +182,21 @@ pid {d}/nginx.pid;
 error_log {d}/error.log warn;
 events {{ worker_connections 1024; }}
 http {{
-    access_log {d}/access.log;
     client_body_temp_path {d}/client_body;
     proxy_temp_path {d}/proxy;
     fastcgi_temp_path {d}/fastcgi;
     uwsgi_temp_path {d}/uwsgi;
     scgi_temp_path {d}/scgi;
 {body}
+{log}
 }}
 """)
         self.proc: subprocess.Popen | None = None
+
+    def routes(self) -> list[tuple[str, str]]:
+        """(request URI, hash key) of each request logged so far."""
+        lines = (self.dir / "access.log").read_text().splitlines()
+        return [tuple(line.split("\t")) for line in lines]   # type: ignore[misc]
 
     def start(self) -> "Nginx":
         self.proc = subprocess.Popen(["nginx", "-p", str(self.dir), "-c", str(self.dir / "nginx.conf")],

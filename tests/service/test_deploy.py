@@ -164,6 +164,37 @@ def test_a_live_link_reaches_the_replica_that_holds_its_session_through_nginx(to
     assert min(run_async(plain(4))) >= 1
 
 
+def test_nginx_hashes_by_the_tokens_the_server_reads(topology):
+    """The key nginx hashes a request by (docker/nginx/fogbank.conf $fogbank_route, logged by
+    the test's nginx) is the room the server reads from the same query (stream/live.py
+    split_live: `room=` and `live=`, case and all), or nothing. A review found nginx's
+    $arg_live and $arg_room case-insensitive: `LIVE=` was routed by its room, and the
+    server read no token from it."""
+    lb, _ = topology
+    room, other = "A" * 8 + "route-test-room", "B" * 16
+    token = f"{room}.{'x' * 16}"
+    cases = {f"/ws?v=1&room={room}": room, f"/ws?room={room}&v=1": room, f"/ws?live={token}": room,
+             f"/ws?live={token}&room={room}": room, f"/ws?v=1&live={room}": room,
+             f"/ws?room=short&live={token}": room,       # the server drops a room that is no token
+             f"/ws?LIVE={token}": "", f"/ws?ROOM={room}": "", f"/ws?xroom={room}": "",
+             f"/ws?Live={token}&v=1": "", f"/ws?v=1&live={room}.short": "",
+             f"/ws?v=1&room={room}x&x": room + "x",
+             f"/api/still.png?room={room}": "", f"/ws?v=1&roomy={other}": ""}
+    for uri in cases:
+        try:
+            urllib.request.urlopen(lb.url + uri, timeout=30).close()
+        except urllib.error.HTTPError:
+            pass   # /ws without an upgrade, an unknown field: what matters is the route logged
+    got = dict(lb.routes())
+    for uri, key in cases.items():
+        # what the server reads: the room, else the live token's room, else nothing
+        from fogbank.stream.live import TOKEN, split_live
+        _, r, t = split_live(uri.split("?", 1)[1]) if uri.startswith("/ws") else ("", None, None)
+        want = r or (t.split(".")[0] if t and TOKEN.fullmatch(t) else "")
+        assert (uri, got[uri]) == (uri, key)
+        assert (uri, key) == (uri, want)
+
+
 def test_a_live_link_reaches_the_replica_that_holds_its_session_through_the_kubernetes_ingress(topology):
     """Issue 34: docker/k8s/ingress-ws.yaml hashes /ws by `room` alone (an annotation names
     a variable but cannot take the token apart), and a viewer's page gives its token's room
