@@ -72,13 +72,14 @@ class Settings(BaseSettings):
                                  "for its presenter to reconnect (a network blip) before it ends for them; "
                                  "0: it ends when the presenter's socket does")
     max_viewers_per_client: int = Field(64, ge=1, le=10000, description="viewers of live sessions "
-                                        "that one client address may hold, over all sessions (a class "
-                                        "behind one NAT shares an address); the next is refused with 1013")
+                                        "that one client address (an IPv6 one: its /64) may hold, over all "
+                                        "sessions (a class behind one NAT shares an address); the next is "
+                                        "refused with 1013")
     messages_per_s: float = Field(120.0, gt=0, description="per-socket message rate (token bucket)")
     message_burst: int = Field(240, ge=1, description="per-socket burst of messages")
     max_sessions_per_client: int = Field(8, ge=1, le=10000, description="streaming sessions one "
-                                         "client address may hold (a classroom behind one NAT shares "
-                                         "an address); the next is refused with 1013")
+                                         "client address (an IPv6 one: its /64) may hold (a classroom "
+                                         "behind one NAT shares an address); the next is refused with 1013")
     yield_after_s: float = Field(20.0, gt=0, le=86400, description="a session paused (time "
                                  "stopped, no drag) that has sent nothing this long gives its place to a new "
                                  "session when the server or its address is full (closed with 4408; the page "

@@ -363,6 +363,41 @@ def test_one_address_holds_at_most_max_viewers_per_client_viewers():
             p.__exit__(None, None, None)
 
 
+def test_viewers_are_counted_by_their_ipv6_64_and_freed_whatever_ends_them():
+    """Found by review: the viewer cap was counted per address, and an IPv6 host holds a
+    whole /64. Viewers from two addresses of one /64 fill a cap of 2, a third from it is
+    refused, one from the next /64 is not; and the count (kept as viewers join and leave,
+    no longer a scan of every viewer) returns to nothing when they have all gone, the
+    refused one included."""
+    from fastapi.testclient import TestClient
+
+    from fogbank.service.api import create_app
+    from fogbank.settings import Settings
+    app = create_app(Settings(max_viewers_per_client=2))
+    with TestClient(app) as c:
+        p = presenter(c)
+
+        def viewer_from(host):
+            c._transport.client = (host, 50000)   # the address the app sees (ASGI scope "client")
+            return viewer(c, token)[0]
+        try:
+            token = share(p)["token"]
+            first, second = viewer_from("2001:db8:1:2::1"), viewer_from("2001:db8:1:2:ffff::2")
+            c._transport.client = ("2001:db8:1:2:aaaa::3", 50000)
+            refused(c, f"/ws?live={token}", "max_viewers_per_client", 1013)
+            other = viewer_from("2001:db8:1:3::1")
+            assert dict(app.state.streamer.watching) == {"2001:db8:1:2::/64": 2, "2001:db8:1:3::/64": 1}
+            for v in (first, second, other):
+                v.__exit__(None, None, None)
+            read(p, until=lambda m: m["type"] == "audience" and m["viewers"] == 0)
+            deadline = time.monotonic() + 10
+            while app.state.streamer.watching and time.monotonic() < deadline:
+                time.sleep(0.05)
+            assert dict(app.state.streamer.watching) == {}
+        finally:
+            p.__exit__(None, None, None)
+
+
 def test_a_viewers_refused_look_change_is_answered(client):
     """Found by review: a viewer's message that the protocol refuses had no `answers`, so
     a page that counts its look changes' answers waited for ever on a malformed one. It

@@ -226,6 +226,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         state["too_costly"] = OrderedDict()   # ETags of stills stopped at their deadline (refused after)
         state["streamer"] = Streamer(sup, frames_per_worker=settings.frames_per_worker, settings=settings)
         state["streamer"].start()
+        app.state.streamer = state["streamer"]   # reachable for tests
         state["ready"] = True
         yield
         state["ready"] = False

@@ -104,6 +104,22 @@ def host_allowed(host: str | None, allowed: frozenset[str], address_too: bool = 
         return False
 
 
+def client_key(host: str) -> str:
+    """What per-client caps count by: an IPv4 address as it is, an IPv6 one as its /64 (one
+    subscriber's network: a host is handed a whole /64 and may use any address in it, so
+    per-address caps would not hold it), an IPv4-mapped IPv6 address as its IPv4 one; any
+    other name (a test client's) as it is."""
+    try:
+        ip = ipaddress.ip_address(host)
+    except ValueError:
+        return host
+    if ip.version == 6:
+        if ip.ipv4_mapped is not None:
+            return str(ip.ipv4_mapped)
+        return str(ipaddress.ip_network(f"{ip}/64", strict=False))
+    return str(ip)
+
+
 class HostCheck:
     """DNS rebinding guard (pure ASGI): a page of another site whose name was made to
     resolve to this server sends its own name as Host, and Origin matches it, so the

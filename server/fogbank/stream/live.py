@@ -505,9 +505,7 @@ async def viewer_endpoint(ws: WebSocket, streamer: Any, token: str, addr: str, r
                    "(ask the presenter for it again)")
     elif len(audience.viewers) >= cfg.max_viewers:
         refusal = (1013, f"this live session has its most viewers ({cfg.max_viewers}); retry later")
-    elif sum(v.addr == addr for a in [*(c.audience for c in streamer.live.values() if c.audience),
-                                      *streamer.away.values()]
-             for v in a.viewers.values()) >= cfg.max_viewers_per_client:
+    elif streamer.watching[addr] >= cfg.max_viewers_per_client:
         refusal = (1013, f"this address watches the most live sessions it may ({cfg.max_viewers_per_client} "
                    "viewers, setting max_viewers_per_client); close one and retry")
     if refusal:
@@ -517,91 +515,97 @@ async def viewer_endpoint(ws: WebSocket, streamer: Any, token: str, addr: str, r
         except WebSocketDisconnect:
             pass
         return
-    now = streamer.clock()
-    session = audience.session
-    viewer = Viewer(uuid.uuid4().hex[:8], session, ws, addr)
-    viewer.start(audience)
-    await viewer.send_json({"type": "hello", "protocol": PROTOCOL, "session": session.id,
-                            "renderer": renderer_info.get("renderer"), "max_message": MAX_MESSAGE,
-                            "refine_budget_ms": REFINE_BUDGET_MS, "play_budget_ms": PLAY_BUDGET_MS,
-                            "live": {"role": "viewer", "id": viewer.id}})
-    await viewer.send_json(session.state(now))
-    audience.join(viewer)
-    await audience.tell()
-    streamer.wake()
-    log.info("viewer joined", extra={"session": session.id, "viewer": viewer.id})
-    from fogbank.stream.streaming import TokenBucket
-    bucket = TokenBucket(cfg.messages_per_s, cfg.message_burst, now)
+    streamer.watching[addr] += 1   # counted until this socket's handler ends, whatever ends it
     try:
-        while not viewer.closed:
-            data = await next_message(ws)
-            if data is None:
-                break
-            if data is TOO_LARGE:
-                viewer.close(1009, f"message over {MAX_MESSAGE} bytes")
-                break
-            now = streamer.clock()
-            if not bucket.take(now):
-                metrics.ERRORS.labels("rate").inc()
-                if bucket.should_notify():
-                    await viewer.send_json({"type": "error", "loc": ["message"],
-                                            "msg": f"over {cfg.messages_per_s:g} messages/s: messages are "
-                                                   "dropped until the rate falls"})
-                continue
-            if audience.ended:   # ended meanwhile: its messages go nowhere
-                break
-            session = audience.session   # its presenter's new one, when it came back
-            try:
-                parsed = parse(data)
-            except ProtocolError as exc:
-                await viewer.answer_error({"type": "error", "detail": exc.errors, "msg": str(exc)},
-                                          refused_answers(data), now)
-                continue
-            if isinstance(parsed, AckMsg):
-                viewer.ack(parsed.frame)
-                await viewer.pay(now)
-            elif isinstance(parsed, PongMsg):
-                pass
-            elif isinstance(parsed, ViewMsg):   # its codecs; the size is the presenter's
-                audience.set_codecs(viewer, tuple(parsed.codecs), now)
-                streamer.wake()
-            elif isinstance(parsed, ShareMsg):
-                await viewer.send_json({"type": "error", "loc": ["message", "type"],
-                                        "msg": "only the presenter shares a live session"})
-            elif isinstance(parsed, ControlMsg):
-                if parsed.to is None and audience.control == viewer.id:   # handed back
-                    audience.hand(None)
-                    await audience.tell()
-                else:
+        now = streamer.clock()
+        session = audience.session
+        viewer = Viewer(uuid.uuid4().hex[:8], session, ws, addr)
+        viewer.start(audience)
+        await viewer.send_json({"type": "hello", "protocol": PROTOCOL, "session": session.id,
+                                "renderer": renderer_info.get("renderer"), "max_message": MAX_MESSAGE,
+                                "refine_budget_ms": REFINE_BUDGET_MS, "play_budget_ms": PLAY_BUDGET_MS,
+                                "live": {"role": "viewer", "id": viewer.id}})
+        await viewer.send_json(session.state(now))
+        audience.join(viewer)
+        await audience.tell()
+        streamer.wake()
+        log.info("viewer joined", extra={"session": session.id, "viewer": viewer.id})
+        from fogbank.stream.streaming import TokenBucket
+        bucket = TokenBucket(cfg.messages_per_s, cfg.message_burst, now)
+        try:
+            while not viewer.closed:
+                data = await next_message(ws)
+                if data is None:
+                    break
+                if data is TOO_LARGE:
+                    viewer.close(1009, f"message over {MAX_MESSAGE} bytes")
+                    break
+                now = streamer.clock()
+                if not bucket.take(now):
+                    metrics.ERRORS.labels("rate").inc()
+                    if bucket.should_notify():
+                        await viewer.send_json({"type": "error", "loc": ["message"],
+                                                "msg": f"over {cfg.messages_per_s:g} messages/s: messages are "
+                                                       "dropped until the rate falls"})
+                    continue
+                if audience.ended:   # ended meanwhile: its messages go nowhere
+                    break
+                session = audience.session   # its presenter's new one, when it came back
+                try:
+                    parsed = parse(data)
+                except ProtocolError as exc:
+                    await viewer.answer_error({"type": "error", "detail": exc.errors, "msg": str(exc)},
+                                              refused_answers(data), now)
+                    continue
+                if isinstance(parsed, AckMsg):
+                    viewer.ack(parsed.frame)
+                    await viewer.pay(now)
+                elif isinstance(parsed, PongMsg):
+                    pass
+                elif isinstance(parsed, ViewMsg):   # its codecs; the size is the presenter's
+                    audience.set_codecs(viewer, tuple(parsed.codecs), now)
+                    streamer.wake()
+                elif isinstance(parsed, ShareMsg):
                     await viewer.send_json({"type": "error", "loc": ["message", "type"],
-                                            "msg": "only the presenter hands control over; a viewer with "
-                                                   "control may give it back (to: null)"})
-            elif audience.away_since is not None and isinstance(parsed, STEERING):
-                await viewer.answer_error({"type": "error", "loc": ["message", "type"],
-                                           "msg": "the presenter's connection dropped: the look waits for it to "
-                                                  "come back (a few seconds)"},
-                                          int(isinstance(parsed, LOOK_CHANGES)), now)
-            elif audience.controls(viewer):
-                await apply_change(session, parsed, viewer, audience.others(viewer), now)
-                streamer.wake()
-            elif isinstance(parsed, InteractMsg):
-                pass
-            else:
-                await viewer.answer_error({"type": "error", "loc": ["message", "type"],
-                                           "msg": "you are watching a live session: the presenter has control "
-                                                  "of the look (open it on your own with Copy link)"},
-                                          int(isinstance(parsed, LOOK_CHANGES)), now)
-    except WebSocketDisconnect:
-        pass
+                                            "msg": "only the presenter shares a live session"})
+                elif isinstance(parsed, ControlMsg):
+                    if parsed.to is None and audience.control == viewer.id:   # handed back
+                        audience.hand(None)
+                        await audience.tell()
+                    else:
+                        await viewer.send_json({"type": "error", "loc": ["message", "type"],
+                                                "msg": "only the presenter hands control over; a viewer with "
+                                                       "control may give it back (to: null)"})
+                elif audience.away_since is not None and isinstance(parsed, STEERING):
+                    await viewer.answer_error({"type": "error", "loc": ["message", "type"],
+                                               "msg": "the presenter's connection dropped: the look waits for it to "
+                                                      "come back (a few seconds)"},
+                                              int(isinstance(parsed, LOOK_CHANGES)), now)
+                elif audience.controls(viewer):
+                    await apply_change(session, parsed, viewer, audience.others(viewer), now)
+                    streamer.wake()
+                elif isinstance(parsed, InteractMsg):
+                    pass
+                else:
+                    await viewer.answer_error({"type": "error", "loc": ["message", "type"],
+                                               "msg": "you are watching a live session: the presenter has control "
+                                                      "of the look (open it on your own with Copy link)"},
+                                              int(isinstance(parsed, LOOK_CHANGES)), now)
+        except WebSocketDisconnect:
+            pass
+        finally:
+            if audience.leave(viewer):
+                await audience.tell()
+            log.info("viewer left", extra={"session": session.id, "viewer": viewer.id, "frames": viewer.frames,
+                                           "skipped": viewer.skipped})
+            if viewer._close is None:
+                viewer.close(1000, "")
+            if viewer._task is not None:   # what it has queued goes out, then its socket closes
+                try:
+                    await asyncio.wait_for(asyncio.shield(viewer._task), 2.0)
+                except (asyncio.TimeoutError, Exception):  # noqa: BLE001
+                    await viewer.stop()
     finally:
-        if audience.leave(viewer):
-            await audience.tell()
-        log.info("viewer left", extra={"session": session.id, "viewer": viewer.id, "frames": viewer.frames,
-                                       "skipped": viewer.skipped})
-        if viewer._close is None:
-            viewer.close(1000, "")
-        if viewer._task is not None:   # what it has queued goes out, then its socket closes
-            try:
-                await asyncio.wait_for(asyncio.shield(viewer._task), 2.0)
-            except (asyncio.TimeoutError, Exception):  # noqa: BLE001
-                await viewer.stop()
+        streamer.watching[addr] -= 1
+        if streamer.watching[addr] <= 0:
+            del streamer.watching[addr]

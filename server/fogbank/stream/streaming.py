@@ -27,7 +27,7 @@ import asyncio
 import logging
 import time
 import uuid
-from collections import OrderedDict
+from collections import Counter, OrderedDict
 from typing import Any
 
 from starlette.websockets import WebSocket, WebSocketDisconnect, WebSocketState
@@ -35,6 +35,7 @@ from starlette.websockets import WebSocket, WebSocketDisconnect, WebSocketState
 from fogbank.workers import cost
 
 from fogbank.service import metrics
+from fogbank.service.security import client_key
 
 from fogbank.workers import worker
 from fogbank.stream.protocol import (FLAG_FULL, FLAG_KEY, FLAG_PLAYING, FLAG_REDUCED, MAX_MESSAGE, PROTOCOL, HEADER,
@@ -129,6 +130,7 @@ class Streamer:
         self.clients: OrderedDict[str, Client] = OrderedDict()
         self.live: dict[str, Client] = {}   # live sessions by their token (stream/live.py)
         self.away: dict[str, live.Audience] = {}   # live sessions whose presenter is away, by its resume key
+        self.watching: Counter[str] = Counter()   # live viewers' sockets by client (service/security.py client_key)
         self.frames: dict[int, int] = {}   # frames being made, by interactive worker index
         self._wake = asyncio.Event()
         self._tasks: list[asyncio.Task] = []
@@ -536,7 +538,7 @@ async def websocket_endpoint(ws: WebSocket, streamer: Streamer, renderer_info: d
     """/ws?<look query>: one session. See protocol.py for the messages."""
     cfg = streamer.settings
     await ws.accept()
-    addr = ws.client.host if ws.client else "?"
+    addr = client_key(ws.client.host) if ws.client else "?"   # what per-client caps count by
     query, room, token = live.split_live(ws.url.query)
     query, resume = live.take_resume(query)
     if token is not None:   # a viewer of a live session: no session, no render of its own
