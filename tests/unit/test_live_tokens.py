@@ -81,7 +81,7 @@ def test_a_viewer_that_stops_reading_holds_two_frames_whatever_it_acknowledges()
         aud = _audience()
         v = Viewer("v1", aud.session, Stuck(), "127.0.0.1")
         v.start(aud)
-        aud.join(v)
+        aud.join(v, 0.0)
         for frame in range(1, 41):
             await aud.fan_out(frame, "jpeg", False, b"x" * 50_000, None, 0.0)
             v.ack(2**32 - 1)
@@ -110,3 +110,51 @@ def test_handing_control_over_ends_the_drag_of_whoever_had_it():
     aud.leave(aud.viewers["v1"])
     assert aud.control is None
     assert s.interacting is False
+
+
+def _watcher(vid, codecs=("vp8", "jpeg")):
+    from types import SimpleNamespace
+    return SimpleNamespace(id=vid, codecs=codecs, waiting_key=True, told_codecs=True, closed=False,
+                           room=lambda: True)
+
+
+def test_viewers_joining_and_leaving_in_a_loop_ask_one_keyframe_a_second():
+    """Review finding 5: each join asked the session for a keyframe and applied pending
+    codec changes at once, so viewers connecting in a loop forced a keyframe (and, with a
+    codec change, a new encoder) on every viewer each time. Ten joins and leaves over 0.9 s
+    of a playing look now ask one keyframe (the first: a viewer that joins alone gets its
+    key at once), the next second one more."""
+    aud = _audience()
+    s = aud.session
+    s.playing = True
+    asked = 0
+    for i in range(20):
+        now = 0.1 * i
+        v = _watcher(f"v{i}")
+        aud.join(v, now)
+        asked += s.need_key
+        s.need_key = False      # the frame that carried it
+        aud.leave(v, now + 0.05)
+        asked += s.need_key
+        s.need_key = False
+    assert asked == 2
+
+
+def test_a_deferred_codec_change_on_a_paused_look_is_drawn_when_it_is_due():
+    """Review finding 6: a codec change held back by the keyframe pace settled only at the
+    next frame's fan-out, and a paused look sends no next frame: the viewer waited for ever.
+    The paused look is now drawn again when the change is due (a keyframe asked 0.3 s ago:
+    at 1.0 s), and then the change settles."""
+    aud = _audience()
+    s = aud.session
+    s.playing = False
+    a = _watcher("a")
+    aud.join(a, 0.0)                 # its key asked at 0.0
+    s.dirty, s.need_key = False, False
+    b = _watcher("b", codecs=("jpeg",))
+    aud.join(b, 0.3)                 # JPEG only: the session's codecs must narrow, not before 1.0
+    assert aud.codecs_due is True
+    assert s.dirty is True and s.not_before == 1.0
+    assert s.decoders == frozenset({"vp8", "jpeg"})   # not yet
+    aud._settle_codecs(1.0)          # the redrawn frame's fan-out, at 1.0
+    assert s.decoders == frozenset({"jpeg"}) and s.need_key is True

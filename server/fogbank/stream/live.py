@@ -281,22 +281,35 @@ class Audience:
         else:
             self.session.decoders = frozenset.intersection(*(frozenset(v.codecs) for v in self.viewers.values()))
 
-    def join(self, viewer: Viewer) -> None:
+    def join(self, viewer: Viewer, now: float) -> None:
+        """A new viewer: its codecs reach the session, and its first video frame (a keyframe)
+        is asked, at once unless a keyframe was asked in the last KEY_EVERY_S (viewers that
+        joined and left in a loop forced a new encoder and a keyframe on every viewer each
+        time); a paused look is drawn again for it."""
         self.viewers[viewer.id] = viewer
-        self._codecs()
-        s = self.session
-        s.need_key = True   # its first video frame stands alone
-        if not s.playing:
-            s.redo()        # a paused look is drawn again for it
         metrics.VIEWERS.inc()
+        self.codecs_due = True
+        self._settle_codecs(now)
+        s = self.session
+        if now - self.key_asked >= KEY_EVERY_S:
+            self.key_asked = now
+            s.need_key = True
+        if not s.playing:
+            s.redo()   # a JPEG viewer's frame at once; a video one keeps what it cannot decode for the key
 
-    def leave(self, viewer: Viewer) -> bool:
+    def leave(self, viewer: Viewer, now: float | None = None) -> bool:
+        """A viewer left: the session's codecs may widen, at the pace of KEY_EVERY_S (`now`
+        None: at once, as the session ends)."""
         if self.viewers.pop(viewer.id, None) is None:
             return False
         metrics.VIEWERS.dec()
         if self.control == viewer.id:
             self.hand(None)
-        self._codecs()
+        if now is None:
+            self._codecs()
+        else:
+            self.codecs_due = True
+            self._settle_codecs(now)
         return True
 
     def hand(self, to: str | None) -> None:
@@ -318,14 +331,20 @@ class Audience:
 
     def _settle_codecs(self, now: float) -> None:
         """A viewer's new codecs reach the session (its codec, and a keyframe) at most every
-        KEY_EVERY_S, the rest at its next frame after: a viewer that flipped its codecs in
-        every message forced a keyframe (or a new encoder) on every viewer each time. Until
-        then it skips the frames it cannot decode (fan_out)."""
-        if self.codecs_due and now - self.key_asked >= KEY_EVERY_S:
+        KEY_EVERY_S, the rest at its next frame after (a paused look's is drawn then): a
+        viewer that flipped its codecs in every message forced a keyframe (or a new encoder)
+        on every viewer each time. Until then it skips the frames it cannot decode (fan_out)."""
+        if not self.codecs_due:
+            return
+        if now - self.key_asked >= KEY_EVERY_S:
             self.codecs_due = False
             self.key_asked = now
             self._codecs()
             self.session.need_key = True
+        elif not self.session.playing:
+            # no frame may come to settle it (fan_out): a paused look is drawn again when
+            # the change is due (review: a deferred change waited for the next frame)
+            self.session.redo(after=self.key_asked + KEY_EVERY_S)
 
     async def fan_out(self, frame: int, codec: str, key: bool, data: bytes, stats: dict[str, Any] | None,
                       now: float) -> None:
@@ -348,10 +367,15 @@ class Audience:
             if stats:
                 await v.send_json(stats)
             await v.send_bytes(data)
-        if video and now - self.key_asked >= KEY_EVERY_S and any(v.waiting_key and v.room() and codec in v.codecs
-                                                                  for v in self.viewers.values()):
-            self.key_asked = now
-            self.session.need_key = True
+        if video and any(v.waiting_key and v.room() and codec in v.codecs for v in self.viewers.values()):
+            s = self.session
+            if now - self.key_asked >= KEY_EVERY_S:
+                self.key_asked = now
+                s.need_key = True
+                if not s.playing:
+                    s.redo()   # a paused look has no next frame to carry it
+            elif not s.playing:
+                s.redo(after=self.key_asked + KEY_EVERY_S)
 
     def end(self, reason: str) -> None:
         """The live session is over: each viewer is told why, then closed."""
@@ -526,7 +550,7 @@ async def viewer_endpoint(ws: WebSocket, streamer: Any, token: str, addr: str, r
                                 "refine_budget_ms": REFINE_BUDGET_MS, "play_budget_ms": PLAY_BUDGET_MS,
                                 "live": {"role": "viewer", "id": viewer.id}})
         await viewer.send_json(session.state(now))
-        audience.join(viewer)
+        audience.join(viewer, now)
         await audience.tell()
         streamer.wake()
         log.info("viewer joined", extra={"session": session.id, "viewer": viewer.id})
@@ -594,7 +618,7 @@ async def viewer_endpoint(ws: WebSocket, streamer: Any, token: str, addr: str, r
         except WebSocketDisconnect:
             pass
         finally:
-            if audience.leave(viewer):
+            if audience.leave(viewer, streamer.clock()):
                 await audience.tell()
             log.info("viewer left", extra={"session": session.id, "viewer": viewer.id, "frames": viewer.frames,
                                            "skipped": viewer.skipped})

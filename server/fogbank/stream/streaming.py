@@ -470,7 +470,7 @@ class Streamer:
                     if v.inflight and now - min(v.inflight.values()) > cfg.ack_timeout_s:
                         why = f"frames unacknowledged for {cfg.ack_timeout_s:g} s"
                         log.info("viewer closed", extra={"session": c.session.id, "viewer": v.id, "reason": why})
-                        c.audience.leave(v)
+                        c.audience.leave(v, now)
                         v.close(IDLE_CLOSE, why)
                         await c.audience.tell()
                 reason = None
