@@ -78,3 +78,53 @@ def test_share_live_watchers_control_a_late_joiner_and_the_end(server, browser):
     for v in (a, b, late):
         assert v.errors == []
         v.context.close()
+
+
+def blip(page) -> None:
+    """The page's socket drops as a network blip does (close 1006 to the page's own handler;
+    the server sees the socket end)."""
+    page.evaluate("""() => {
+        const ws = window.fogbank.stream.ws;
+        const onclose = ws.onclose;
+        ws.onclose = null;
+        ws.close();
+        onclose({ code: 1006, reason: "" });
+    }""")
+
+
+def test_a_presenters_blip_resumes_its_live_session_for_its_viewers(server, browser):
+    """Issue 34: a presenter's page whose socket drops reconnects with its room and resume
+    key and gets its live session back: the same token, its viewer still watching (never
+    told it ended), the look it had, and a change made after the blip reaches the viewer.
+    Its sockets' rooms: the same before and after (a page sharing nothing takes a fresh
+    one: test_page_reconnects_after_the_server_restarts)."""
+    from urllib.parse import parse_qs, urlsplit
+    presenter = new_page(browser, server.url + "/?time=3")
+    rooms = []
+    presenter.on("websocket", lambda ws: rooms.append(parse_qs(urlsplit(ws.url).query)))
+    presenter.reload()
+    wait_frames(presenter, 3)
+    presenter.click("#share-live")
+    presenter.wait_for_function("window.fogbank.store.get().live?.token")
+    token = presenter.evaluate("window.fogbank.store.get().live.token")
+    viewer = new_page(browser, f"{server.url}/?live={token}")
+    wait_frames(viewer, 3)
+    presenter.wait_for_function("window.fogbank.store.get().live.viewers === 1")
+    before = presenter.evaluate(CONFIRMED)
+    blip(presenter)
+    presenter.wait_for_function("window.fogbank.stream.connected && window.fogbank.store.get().live?.token",
+                                timeout=20000)
+    assert presenter.evaluate("window.fogbank.store.get().live.token") == token
+    assert presenter.evaluate("window.fogbank.store.get().live.viewers") == 1
+    assert len(rooms) == 2
+    assert rooms[1]["room"] == rooms[0]["room"] and "resume" in rooms[1] and "resume" not in rooms[0]
+    assert presenter.evaluate(CONFIRMED) == before
+    presenter.select_option("#preset", "forest-shafts")
+    wait_query(presenter, "sun.azimuth=45")
+    viewer.wait_for_function(f"({CONFIRMED}) === {presenter.evaluate(CONFIRMED)!r}")
+    assert "has ended" not in viewer.locator("#watching-text").inner_text()
+    frames = int(viewer.evaluate("document.getElementById('view').dataset.frames"))
+    wait_frames(viewer, frames + 2)
+    for p in (presenter, viewer):
+        assert p.errors == []
+        p.context.close()

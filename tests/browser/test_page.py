@@ -10,6 +10,7 @@ import json
 import re
 import time
 import urllib.request
+from urllib.parse import parse_qs, urlsplit
 from pathlib import Path
 
 import numpy as np
@@ -139,6 +140,9 @@ def test_page_reconnects_after_the_server_restarts(browser):
     s = Server().start()
     try:
         page = new_page(browser, s.url + "/?v=1&camera.yaw=45")   # not the default's yaw
+        rooms = []
+        page.on("websocket", lambda ws: rooms.append(parse_qs(urlsplit(ws.url).query).get("room", [None])[0]))
+        page.reload()
         wait_frames(page, 3)
         s.stop()
         page.wait_for_selector("#banner:not([hidden])", timeout=20000)
@@ -157,6 +161,11 @@ def test_page_reconnects_after_the_server_restarts(browser):
         assert time.monotonic() - back <= 2.0
         wait_frames(page, before + 3)
         assert "camera.yaw=45" in page.url   # the same look, from the URL
+        # a page that shares nothing tries each time with a fresh room (issue 34 review
+        # finding 2: a load balancer hashing by room kept sending it to the replica that had
+        # gone): every connection's room is its own
+        assert len(rooms) >= 2 and None not in rooms
+        assert len(set(rooms)) == len(rooms)
         page.wait_for_function("window.fogbank.store.get().confirmed.params.density === 1.7")
         assert page.locator("[data-path='density']").input_value() == "1.7"
         # the whole panel shows the look the new session confirmed

@@ -51,6 +51,17 @@ export function liveUi({ stream, store, $, toast, lookQuery }) {
       copy(liveLink(live.token), "Live link copied: whoever opens it watches this session");
     }
   });
+  // A page that shares nothing reconnects with a fresh room: a load balancer that hashes by
+  // the room (the Kubernetes ingress's consistent hash) then picks a replica again, where
+  // the old room kept it retrying the one that held it, dead or not, until that one left
+  // the endpoints (about 15 s). A presenter keeps its room for its first two tries (a
+  // blip: its live session comes back on the replica that holds it), then starts afresh.
+  stream.addEventListener("reconnecting", () => {
+    if (liveToken) return;   // a viewer: its session is where its token leads
+    const live = store.get().live;
+    const presenting = live && live.role === "presenter" && live.token && live.resume;
+    if (!presenting || stream.retry > 2) stream.extra = `room=${newRoom()}`;
+  });
   stream.addEventListener("ended", (e) => {
     store.set({ live: { ...(store.get().live || {}), ended: e.detail.msg, control: null } });
   });
