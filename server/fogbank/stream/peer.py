@@ -1,8 +1,8 @@
 """One socket of a session, as the server writes to it: its messages, and the reply it
 owes to look changes, which waits in the flow-control window (issue 34).
 
-A reply to look changes goes out only while fewer than MAX_IN_FLIGHT frames are
-unacknowledged on this socket, or just before a frame; changes made meanwhile collapse
+A reply to look changes goes out only while fewer than the socket's window of frames are
+unacknowledged on it (Peer.window), or just before a frame; changes made meanwhile collapse
 into one reply, built from the session as it is when it goes. Its "answers" counts the
 changes it answers (made on this socket: a live session's other sockets are told of a
 change with answers 0). The presenter's socket is a streaming.Client, a viewer's a
@@ -53,14 +53,18 @@ class Peer:
         """Frames sent on this socket and not acknowledged."""
         raise NotImplementedError
 
+    def window(self) -> int:
+        """Frames that may be unacknowledged on this socket before a reply waits."""
+        return MAX_IN_FLIGHT
+
     def owe(self, kind: str, answers: int) -> None:
         self.owed = "state" if "state" in (kind, self.owed) else kind
         self.owed_answers += answers
 
     async def pay(self, now: float, force: bool = False) -> None:
-        """Send the owed reply if fewer than MAX_IN_FLIGHT frames are unacknowledged (or
-        `force`: a frame follows it)."""
-        if self.owed is None or (not force and self.unacked() >= MAX_IN_FLIGHT):
+        """Send the owed reply if fewer than window() frames are unacknowledged (or `force`:
+        a frame follows it)."""
+        if self.owed is None or (not force and self.unacked() >= self.window()):
             return
         s = self.session
         msg = s.state(now) if self.owed == "state" else s.camera_state()

@@ -44,7 +44,8 @@ its look (the key its load balancer routes by), and "share" makes that token the
 link; viewers connect with `live=<token>` alone and get the presenter's frames, state and
 "audience" messages. A viewer's look changes apply only while it has control.
 
-A reply to look changes waits while MAX_IN_FLIGHT frames are unacknowledged; the changes
+A reply to look changes waits while the socket's window of frames is unacknowledged (two,
+and those one round trip holds: session.py Session.window); the changes
 made meanwhile collapse into one reply, which `answers` of them (query, params, camera,
 seek messages; 0 for play and speed).
 """

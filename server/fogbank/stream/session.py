@@ -3,7 +3,8 @@ preferred view, frames in flight, and when the next frame is due.
 
 Latest-wins: a session holds only its current state; a frame is a snapshot of it taken
 when the scheduler starts that frame, so changes that arrive meanwhile are never queued
-behind it. At most MAX_IN_FLIGHT frames are unacknowledged or being made.
+behind it. At most window() frames are unacknowledged or being made: MAX_IN_FLIGHT, and
+those one round trip of its link holds (stream/link.py pipe_frames).
 """
 
 from __future__ import annotations
@@ -375,6 +376,11 @@ class Session:
     def in_flight(self) -> int:
         return (self.sent - self.acked) + self.making
 
+    def window(self) -> int:
+        """Frames that may be unacknowledged or being made: two, and those its link's round
+        trip holds (stream/link.py pipe_frames)."""
+        return MAX_IN_FLIGHT + self.link.pipe_frames()
+
     def previewing(self, now: float) -> bool:
         return self.interacting or now - self.last_input < INPUT_SETTLE_S
 
@@ -388,7 +394,7 @@ class Session:
 
     def next_due(self, now: float) -> float | None:
         """When the next frame may start (None: nothing to send until something changes)."""
-        if self.in_flight() >= MAX_IN_FLIGHT:
+        if self.in_flight() >= self.window():
             return None   # an ack or a finished frame wakes the scheduler
         if not self.view_known and now < self.created + VIEW_WAIT_S:
             return self.created + VIEW_WAIT_S   # no frame at a size the client did not ask for

@@ -6,8 +6,8 @@ its cached scene pass stays where its frames are drawn. The scheduler starts a f
 the next due session in round-robin order, with at most `frames_per_worker` frames on
 each worker (and one more for a stream that only plays: Streamer.queue_room). Each frame
 is a snapshot of its session (latest wins); the worker renders and JPEG-encodes it, and
-the bytes go out as header + JPEG. A session never has more than MAX_IN_FLIGHT frames
-unacknowledged, so a slow client gets fewer frames, never older ones. The replies to
+the bytes go out as header + JPEG. A session never has more than its window of frames
+unacknowledged (two, and those one round trip holds: Session.window), so a slow client gets fewer frames, never older ones. The replies to
 look changes wait in that window too (Client.owe): a camera message is answered with the
 camera alone, and changes made while the window is full collapse into one reply.
 
@@ -115,6 +115,9 @@ class Client(Peer):
 
     def unacked(self) -> int:
         return self.session.sent - self.session.acked
+
+    def window(self) -> int:
+        return self.session.window()
 
     async def ping(self, now: float) -> None:
         await self.send_json({"type": "ping", "ping": self.session.link.ping(now)})

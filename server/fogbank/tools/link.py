@@ -253,11 +253,13 @@ LINK_CASES = (
     ("orbit default, loopback", "default", "orbit", None, 0),
     ("orbit default, 5 Mbit/s 40 ms", "default", "orbit", 5e6, 40),
     ("orbit default, 1 Mbit/s 40 ms", "default", "orbit", 1e6, 40),
+    ("orbit default, 20 Mbit/s 80 ms", "default", "orbit", 20e6, 80),
     ("orbit 16 layers, loopback", "16", "orbit", None, 0),
     ("orbit 16 layers, 5 Mbit/s 40 ms", "16", "orbit", 5e6, 40),
     ("orbit 16 layers, 1 Mbit/s 40 ms", "16", "orbit", 1e6, 40),
     ("720p playing, loopback", "default", "watch", None, 0),
     ("720p playing, 5 Mbit/s 40 ms", "default", "watch", 5e6, 40),
+    ("720p playing, 20 Mbit/s 80 ms", "default", "watch", 20e6, 80),
     ("720p playing, 2 Mbit/s 40 ms", "default", "watch", 2e6, 40),
     ("720p playing, 1 Mbit/s 40 ms", "default", "watch", 1e6, 40),
 )
