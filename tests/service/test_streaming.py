@@ -329,3 +329,40 @@ def test_video_frames_are_as_close_to_the_stills_as_jpeg_q80_in_fewer_bytes(clie
     assert np.mean(video_ssim) >= np.mean(jpeg_ssim)
     # bytes a frame over the stream, its first keyframe included
     assert np.mean([len(d) for _, d in video]) <= np.mean([len(d) for _, d in jpeg]) / 3
+
+
+def test_a_1080p_stream_in_vp9_decodes_to_the_stills_of_its_look(client):
+    """Issue 34: video at 1080p in a stream (its encoders were measured at 1080p; no stream
+    had sent it). The default look playing, asked at 1920x1080 in VP9: the stream starts
+    small and grows to the view (each new size a keyframe); its packets, decoded in order by
+    PyAV's own VP9 decoder, give one picture each at its header's size, and the last three
+    at 1920x1080 are each within 30 dB PSNR of the still of the same look at the frame's
+    own time (GET /api/still.png)."""
+    import av
+
+    from fogbank.stream.protocol import CODEC_IDS, FLAG_KEY
+    with open_ws(client, "v=1&time=3") as ws:
+        ws.receive_json(), ws.receive_json()   # hello, state
+        ws.send_json({"type": "view", "width": 1920, "height": 1080, "fps": 30, "quality": 80,
+                      "codecs": ["vp09", "jpeg"]})
+        dec = av.CodecContext.create("vp9", "r")
+        frames = []   # (header, decoded pictures)
+        while sum((h[6], h[7]) == (1920, 1080) for h, _ in frames) < 3 and len(frames) < 60:
+            m = ws.receive()
+            if not m.get("bytes"):
+                continue
+            h = HEADER.unpack(m["bytes"][:HEADER.size])
+            ws.send_json({"type": "ack", "frame": h[1]})
+            assert h[11] == CODEC_IDS["vp09"]
+            if not frames or (h[6], h[7]) != (frames[-1][0][6], frames[-1][0][7]):
+                assert h[9] & FLAG_KEY   # the first frame, and each new size, stands alone
+            frames.append((h, [f.to_ndarray(format="rgb24") for f in dec.decode(av.Packet(m["bytes"][HEADER.size:]))]))
+    assert all(len(pics) == 1 and pics[0].shape == (h[7], h[6], 3) for h, pics in frames)
+    full = [(h, pics[0]) for h, pics in frames if (h[6], h[7]) == (1920, 1080)][-3:]
+    assert len(full) == 3
+    for h, pic in full:
+        r = client.get(f"/api/still.png?v=1&time={h[3]:.6f}&width=1920&height=1080")
+        still = np.asarray(Image.open(io.BytesIO(r.content)).convert("RGB")).astype(float)
+        psnr = 10 * np.log10(255.0 ** 2 / max(float(((pic.astype(float) - still) ** 2).mean()), 1e-9))
+        print(f"\n1080p VP9 frame {h[1]} at {h[3]:.3f} s: PSNR {psnr:.1f} dB to the still")
+        assert psnr >= 30.0
