@@ -184,7 +184,8 @@ def cmd_soak(args) -> None:
     from fogbank.tools.child import ChildServer
     srv = ChildServer()
     try:
-        res = soak.run(srv.url, srv.rss_mb, args.clients, args.seconds, srv.log_text, churn=args.churn)
+        res = soak.run(srv.url, srv.rss_mb, args.clients, args.seconds, srv.log_text, churn=args.churn,
+                       codecs=tuple(args.codecs.split(",")))
     finally:
         srv.stop()
     print(soak.report(res))
@@ -230,6 +231,8 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--seconds", type=float, default=600.0)
     p.add_argument("--out", help="write the results as JSON here")
     p.add_argument("--churn", action="store_true", help="each client changes look and view size every second")
+    p.add_argument("--codecs", default="jpeg", help="what the clients decode, most wanted first (vp09,jpeg: "
+                                                     "video frames while time runs)")
     p.set_defaults(fn=cmd_soak)
     p = sub.add_parser("bench-link", help="the stream through a thin link (a loopback relay: 5, 2, 1 Mbit/s)")
     p.add_argument("--before-tree", help="another checkout's server/ folder, run in turn with this code")

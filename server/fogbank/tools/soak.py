@@ -39,16 +39,17 @@ def _churn(rng: random.Random) -> list[dict]:
             {"type": "view", "width": w, "height": h, "fps": 30}]
 
 
-async def _client(url: str, i: int, seconds: float, stats: dict, churn: bool = False) -> None:
+async def _client(url: str, i: int, seconds: float, stats: dict, churn: bool = False,
+                  codecs: tuple[str, ...] = ("jpeg",)) -> None:
     rng = random.Random(i)
-    frames, errors, windows = 0, 0, set()
+    frames, errors, windows, video = 0, 0, set(), 0
     t0 = time.monotonic()
     try:
         async with websockets.connect(f"{url}/ws?v=1&camera.yaw={rng.uniform(-40, 40):.1f}",
                                       max_size=None) as ws:
             await ws.recv()
             await ws.recv()
-            await ws.send(json.dumps({"type": "view", "width": 640, "height": 360, "fps": 30}))
+            await ws.send(json.dumps({"type": "view", "width": 640, "height": 360, "fps": 30, "codecs": list(codecs)}))
             next_move = t0 + 1.0
             while (now := time.monotonic()) - t0 < seconds:
                 try:
@@ -57,6 +58,7 @@ async def _client(url: str, i: int, seconds: float, stats: dict, churn: bool = F
                     continue
                 if isinstance(m, bytes):
                     frames += 1
+                    video += HEADER.unpack(m[:HEADER.size])[11] != 0   # codec 0: JPEG
                     windows.add(int((now - t0) // WINDOW_S))
                     await ws.send(json.dumps({"type": "ack", "frame": HEADER.unpack(m[:HEADER.size])[1]}))
                 elif json.loads(m).get("type") == "error":
@@ -64,13 +66,13 @@ async def _client(url: str, i: int, seconds: float, stats: dict, churn: bool = F
                 if now >= next_move and churn:   # a new look and view size every second
                     next_move = now + 1.0
                     for msg in _churn(rng):
-                        await ws.send(json.dumps(msg))
+                        await ws.send(json.dumps({**msg, "codecs": list(codecs)} if msg["type"] == "view" else msg))
                 elif now >= next_move:   # a user nudging the view now and then
                     next_move = now + rng.uniform(1, 4)
                     await ws.send(json.dumps({"type": "camera", "camera": {"yaw": rng.uniform(-60, 60)}}))
     except Exception as exc:  # noqa: BLE001 - a dropped client is a failure to report
         stats.setdefault("exceptions", []).append(f"client {i}: {type(exc).__name__}: {exc}")
-    stats[i] = {"frames": frames, "errors": errors, "windows": sorted(windows)}
+    stats[i] = {"frames": frames, "video_frames": video, "errors": errors, "windows": sorted(windows)}
 
 
 async def _memory(rss, seconds: float, samples: list) -> None:
@@ -80,17 +82,19 @@ async def _memory(rss, seconds: float, samples: list) -> None:
         await asyncio.sleep(2.0)
 
 
-async def _run(url: str, clients: int, seconds: float, rss, churn: bool) -> dict:
+async def _run(url: str, clients: int, seconds: float, rss, churn: bool, codecs: tuple[str, ...]) -> dict:
     stats: dict = {}
     samples: list = []
     await asyncio.gather(_memory(rss, seconds, samples),
-                         *[_client(url, i, seconds, stats, churn) for i in range(clients)])
+                         *[_client(url, i, seconds, stats, churn, codecs) for i in range(clients)])
     return {"stats": stats, "memory": samples}
 
 
 def run(url: str, rss, clients: int = 8, seconds: float = 600.0, log_text=lambda: "",
-        churn: bool = False) -> dict:
-    res = asyncio.run(_run(url.replace("http", "ws", 1), clients, seconds, rss, churn))
+        churn: bool = False, codecs: tuple[str, ...] = ("jpeg",)) -> dict:
+    """`codecs`: what each client says it decodes (its view messages): ("vp09", "jpeg")
+    makes the frames drawn while time runs VP9, each session with its own encoder."""
+    res = asyncio.run(_run(url.replace("http", "ws", 1), clients, seconds, rss, churn, codecs))
     per = [res["stats"][i] for i in range(clients) if i in res["stats"]]
     windows = int(seconds // WINDOW_S)
     mem = [m for _, m in res["memory"]]
@@ -105,8 +109,9 @@ def run(url: str, rss, clients: int = 8, seconds: float = 600.0, log_text=lambda
     log = log_text()
     bad_log = [line for line in log.splitlines()
                if '"level": "error"' in line or "Traceback" in line or "Exception" in line]
-    out = {"clients": clients, "seconds": seconds, "churn": churn,
+    out = {"clients": clients, "seconds": seconds, "churn": churn, "codecs": list(codecs),
            "frames_per_client": [p["frames"] for p in per],
+           "video_frames_per_client": [p["video_frames"] for p in per],
            "errors": sum(p["errors"] for p in per) + len(res["stats"].get("exceptions", [])),
            "client_exceptions": res["stats"].get("exceptions", []),
            "every_client_every_window": all(len(p["windows"]) >= windows - 1 for p in per) and len(per) == clients,
@@ -120,8 +125,10 @@ def run(url: str, rss, clients: int = 8, seconds: float = 600.0, log_text=lambda
 def report(res: dict) -> str:
     mem = res["memory_mb"]
     lines = [f"soak: {res['clients']} clients x {res['seconds']:.0f} s"
-             + (" (churn: look and view size change every second)" if res.get("churn") else ""),
+             + (" (churn: look and view size change every second)" if res.get("churn") else "")
+             + f", decoding {','.join(res.get('codecs', ['jpeg']))}",
              f"  frames per client: {res['frames_per_client']}",
+             f"  video frames per client: {res.get('video_frames_per_client')}",
              f"  errors: {res['errors']}  every client in every {WINDOW_S:.0f} s window: "
              f"{res['every_client_every_window']}",
              f"  process tree RSS MB: start {mem[0][1]:.0f}, end {mem[-1][1]:.0f}, max {max(m for _, m in mem):.0f}; "
