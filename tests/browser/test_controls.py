@@ -221,3 +221,56 @@ def test_shift_drags_a_slider_ten_times_finer_and_a_double_click_resets_it(serve
     _wait_confirmed(page, "wind.direction", schema["$defs"]["Wind"]["properties"]["direction"]["default"])
     assert page.errors == []
     page.context.close()
+
+
+CONFIRMED_LAYER = "window.fogbank.store.get().confirmed?.params?.layers?.[{i}]"
+
+
+def _commit(page, path: str, value) -> None:
+    box = page.locator(f"[data-path='{path}']")
+    box.fill(str(value))
+    box.press("Enter")
+
+
+def test_controls_keep_the_cross_field_rules_instead_of_offering_what_is_refused(server, browser):
+    """Issue 37, item 1: on the default look the cosine amplitudes already sum to c0, so
+    raising one was refused, with a validator's string over the view. Now (the kind's
+    x-rules, kept by static/controls.js keepRules): raising an amplitude carries c0 up to
+    the new sum, said next to the control; lowering c0 under the sum stops at it, said so;
+    a particle layer's shortest life raised past its longest carries the longest along, and
+    the longest lowered under the shortest stops there. The server confirms each look (no
+    error message, nothing refused)."""
+    page = new_page(browser, server.url + "/?v=1&time=3")
+    wait_frames(page, 2)
+    page.evaluate("""() => window.fogbank.stream.addEventListener("error",
+        (e) => (window.__errors = (window.__errors || []).concat([e.detail.msg])))""")
+    page.locator("details[data-section='Layers']").evaluate("d => d.open = true")
+    page.locator("[data-path='layers.1.c0']").wait_for(state="attached")
+    page.evaluate("""() => { for (const d of document.querySelectorAll('#controls details')) d.open = true; }""")
+    # an amplitude raised: c0 follows it
+    _commit(page, "layers.1.terms.0.amp", 2.5)   # the others sum to 0.5: c0 2.5 + 0.5 = 3.0
+    page.wait_for_function(CONFIRMED_LAYER.format(i=1) + "?.c0 === 3")
+    assert page.locator("[data-path='layers.1.c0']").input_value() == "3"
+    note = page.locator(".rule-note")
+    assert "raised to 3" in note.inner_text() and "never goes negative" in note.inner_text()
+    from pathlib import Path
+    shots = Path(__file__).resolve().parents[2] / "out" / "screenshots"
+    shots.mkdir(parents=True, exist_ok=True)
+    note.scroll_into_view_if_needed()
+    page.screenshot(path=str(shots / "rule-note.png"))
+    # c0 lowered under the sum: it stops there
+    _commit(page, "layers.1.c0", 0.2)
+    page.wait_for_selector(".rule-note:has-text('stops at 3')")
+    assert page.locator("[data-path='layers.1.c0']").input_value() == "3"
+    assert page.evaluate(CONFIRMED_LAYER.format(i=1) + ".c0") == 3
+    # particles: the shortest life past the longest carries it; the longest under the shortest stops
+    _commit(page, "layers.3.life_min", 60)
+    page.wait_for_function(CONFIRMED_LAYER.format(i=3) + "?.life_max === 60")
+    assert "raised to 60" in page.locator(".rule-note").inner_text()
+    _commit(page, "layers.3.life_max", 10)
+    page.wait_for_selector(".rule-note:has-text('stops at 60')")
+    assert page.evaluate(CONFIRMED_LAYER.format(i=3) + ".life_max") == 60
+    wait_frames(page, int(page.evaluate("document.getElementById('view').dataset.frames")) + 1)
+    assert page.evaluate("window.__errors || []") == []
+    assert page.errors == []
+    page.context.close()

@@ -17,7 +17,9 @@ Spread = Annotated[float, Field(strict=True, ge=0.0, le=1000.0)]
 
 class Particles(LayerBase):
     """Fischer: a few free-floating particles; T = prod (1 - alpha s_j clamp(1 - dist_j/R, 0, 1))."""
-    model_config = ConfigDict(title="Particles")
+    # x-rules: the validator's cross-field rule for the page (static/controls.js keepRules)
+    model_config = ConfigDict(title="Particles", json_schema_extra={"x-rules": [
+        {"field": "life_max", "atLeast": {"field": "life_min"}, "why": "the longest life is at least the shortest"}]})
     kind: Literal["particles"] = "particles"
     source = "Fischer, Clouds, Fog, and Smoke"
     summary = "A few free-floating particles born at an emitter and carried by the wind: drifting fog or smoke."

@@ -4,7 +4,7 @@
 // with store.set()/update(); the toolbar, the time slider and the canvas's data-* follow it.
 
 import { Stream, decodableCodecs } from "./stream.js";
-import { Controls, buildPatch } from "./controls.js";
+import { Controls, buildPatch, itemSchemaAt, keepRules } from "./controls.js";
 import { UndoStack } from "./undo.js";
 import { compactQuery, isLong, withCamera } from "./links.js";
 import { functionEditor } from "./editor.js";
@@ -122,16 +122,52 @@ const controls = new Controls($("controls"), schema, (path, value) => {
   // a list added to, removed from or reordered, or a layer toggled, changes the form
   const structural = (Array.isArray(value) && (value.length === 0 || typeof value[0] === "object"))
     || path.at(-1) === "enabled";
+  let notes = [];
   store.update((s) => {
-    const patch = buildPatch(s.params, path, value);
+    let patch = buildPatch(s.params, path, value);
+    // a field of a layer: its kind's cross-field rules are kept (controls.js keepRules), so
+    // that the control never offers what the server then refuses
+    if (path[0] === "layers" && path.length >= 3 && !structural) {
+      const i = Number(path[1]);
+      const edited = merge(s.params, patch).layers?.[i];
+      const kept = edited && keepRules(edited, itemSchemaAt(schema, s.params, ["layers"], i), String(path[2]));
+      if (kept && kept.notes.length) {
+        notes = kept.notes;
+        patch = buildPatch(s.params, ["layers", i], kept.layer);
+      }
+    }
     return {
       params: merge(s.params, patch),
       pendingParams: merge(s.pendingParams || {}, patch),
       ...(structural ? { redrawNext: true } : {}),
     };
   });
+  if (notes.length) ruleNote(path, notes);
   queueFlush();
 }, addLayer);
+
+// A rule's note, next to the control that was edited (in words; it goes with the next edit
+// or after a while), and the control set to what the look now holds (a focused field keeps
+// its text otherwise).
+function ruleNote(path, notes) {
+  const field = controls.form.querySelector(`[data-path="${CSS.escape(path.join("."))}"]`);
+  const wrap = field?.closest(".field");
+  if (!wrap) return;
+  for (const old of controls.form.querySelectorAll(".rule-note")) old.remove();
+  const held = valueAtPath(store.get().params, path);
+  if (field && held !== undefined && typeof held !== "object" && field.value !== String(held)) field.value = String(held);
+  const note = document.createElement("p");
+  note.className = "rule-note";
+  note.setAttribute("role", "status");
+  note.textContent = notes.map((n) => n.text).join(" ");
+  wrap.after(note);
+  clearTimeout(ruleNote.timer);
+  ruleNote.timer = setTimeout(() => note.remove(), 10000);
+}
+
+function valueAtPath(obj, path) {
+  return path.reduce((v, k) => (v == null ? v : v[k]), obj);
+}
 controls.onChange.interact = setInteract;
 controls.ctx.cameraBounds = cameraBounds;
 // the function editor of a polynomial or cosine layer: a shape that breaks no rule

@@ -527,3 +527,43 @@ export function buildPatch(obj, path, value) {
   });
   return patch;
 }
+
+// The cross-field rules of a layer's kind (its schema's x-rules, stated beside the server's
+// validator), kept as the user edits one field of `layer`: a field bound from below by
+// another ("atLeast": another field, or the sum of |x| over a list's items) is carried up
+// with the edit that raised its bound, and an edit that lowers it past its bound stops at
+// the bound. Returns the layer as it will be sent and, for each field changed or held,
+// a note in words ({ key, text }); the layer unchanged where no rule binds.
+export function keepRules(layer, node, edited) {
+  const notes = [];
+  const out = { ...layer };
+  for (const rule of node?.["x-rules"] || []) {
+    const b = rule.atLeast || {};
+    const bound = b.field !== undefined ? Number(out[b.field])
+      : (out[b.sumAbs[0]] || []).reduce((acc, item) => acc + Math.abs(Number(item[b.sumAbs[1]]) || 0), 0);
+    const prop = node.properties?.[rule.field] || {};
+    const step = Number(prop.step) || (prop.type === "integer" ? 1 : 0);
+    const up = step ? snapUp(bound, step) : bound;
+    if (!(Number(out[rule.field]) < bound - 1e-9)) continue;
+    const name = label(rule.field, prop);
+    out[rule.field] = up;
+    notes.push({ key: edited === rule.field ? rule.field : edited,
+      text: edited === rule.field ? `${name} stops at ${up} here: ${rule.why}. Lower the others first.`
+        : `${name} raised to ${up}: ${rule.why}.` });
+  }
+  return { layer: out, notes };
+}
+
+// the least multiple of `step` at or above v, written with step's decimals
+function snapUp(v, step) {
+  const decimals = Math.max(0, (String(step).split(".")[1] || "").length);
+  return Number((Math.ceil(v / step - 1e-9) * step).toFixed(decimals));
+}
+
+// the schema of the list item at `path` of `params` (a layer), or null
+export function itemSchemaAt(schema, params, listPath, index) {
+  let node = resolve(schema, schema);
+  for (const k of listPath) node = resolve(schema, node?.properties?.[k]);
+  const item = listPath.reduce((v, k) => v?.[k], params)?.[index];
+  return node?.items && item ? itemSchema(schema, node, item) : null;
+}
