@@ -179,7 +179,9 @@ def test_nginx_hashes_by_the_tokens_the_server_reads(topology):
              f"/ws?LIVE={token}": "", f"/ws?ROOM={room}": "", f"/ws?xroom={room}": "",
              f"/ws?Live={token}&v=1": "", f"/ws?v=1&live={room}.short": "",
              f"/ws?v=1&room={room}x&x": room + "x",
-             f"/api/still.png?room={room}": "", f"/ws?v=1&roomy={other}": ""}
+             f"/api/still.png?room={room}": "", f"/ws?v=1&roomy={other}": "",
+             f"/ws?room={room}&room={other}": "",        # the server drops a room given twice
+             f"/ws?room={room}&v=1&room={other}&live={token}": room}
     for uri in cases:
         try:
             urllib.request.urlopen(lb.url + uri, timeout=30).close()

@@ -347,7 +347,7 @@ def test_a_1080p_stream_in_vp9_decodes_to_the_stills_of_its_look(client):
                       "codecs": ["vp09", "jpeg"]})
         dec = av.CodecContext.create("vp9", "r")
         frames = []   # (header, decoded pictures)
-        while sum((h[6], h[7]) == (1920, 1080) for h, _ in frames) < 3 and len(frames) < 60:
+        while sum((h[6], h[7]) == (1920, 1080) for h, _ in frames) < 3 and len(frames) < 300:
             m = ws.receive()
             if not m.get("bytes"):
                 continue

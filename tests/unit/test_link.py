@@ -185,7 +185,10 @@ def test_the_window_is_two_until_the_round_trip_is_measured_and_holds_at_most_fo
     assert link.pipe_frames() == 0
     link.pong(link.ping(0.0), 0.0005)   # loopback
     assert link.pipe_frames() == 0
-    link.sent(1, 1000, 0.0, 1 / 30)
+    link.sent(1, 1000, 0.0, 1 / 30)   # the stream's interval: 0.5 ms holds no frame of 33
+    assert link.pipe_frames() == 0
+    link.sent(2, 1000, 0.0, 1 / 2000)   # ... and one of a 2000 fps stream's 0.5 ms
+    assert link.pipe_frames() == 1
     link2 = Link()
     link2.pong(link2.ping(0.0), 2.0)    # a satellite's two seconds
     assert link2.pipe_frames() == MAX_PIPE_FRAMES == 4

@@ -112,18 +112,18 @@ def test_handing_control_over_ends_the_drag_of_whoever_had_it():
     assert s.interacting is False
 
 
-def _watcher(vid, codecs=("vp8", "jpeg")):
+def _watcher(vid, told=False):
     from types import SimpleNamespace
-    return SimpleNamespace(id=vid, codecs=codecs, waiting_key=True, told_codecs=True, closed=False,
-                           room=lambda: True)
+    return SimpleNamespace(id=vid, codecs=("jpeg",), waiting_key=True, told_codecs=told, closed=False,
+                           joined=0.0, room=lambda: True)
 
 
 def test_viewers_joining_and_leaving_in_a_loop_ask_one_keyframe_a_second():
-    """Review finding 5: each join asked the session for a keyframe and applied pending
-    codec changes at once, so viewers connecting in a loop forced a keyframe (and, with a
-    codec change, a new encoder) on every viewer each time. Ten joins and leaves over 0.9 s
-    of a playing look now ask one keyframe (the first: a viewer that joins alone gets its
-    key at once), the next second one more."""
+    """Review finding 5: each join asked the session for a keyframe and applied its codecs
+    at once (and a page's first view message asked again, whatever the pace), so viewers
+    connecting in a loop forced a keyframe, or a new encoder, on every viewer each time.
+    Twenty pages that join, say they decode VP8 and leave, 0.1 s apart over 2 s of a
+    playing look, now ask 2 keyframes (the first page's at once)."""
     aud = _audience()
     s = aud.session
     s.playing = True
@@ -132,6 +132,7 @@ def test_viewers_joining_and_leaving_in_a_loop_ask_one_keyframe_a_second():
         now = 0.1 * i
         v = _watcher(f"v{i}")
         aud.join(v, now)
+        aud.set_codecs(v, ("vp8", "jpeg"), now + 0.01)
         asked += s.need_key
         s.need_key = False      # the frame that carried it
         aud.leave(v, now + 0.05)
@@ -140,21 +141,59 @@ def test_viewers_joining_and_leaving_in_a_loop_ask_one_keyframe_a_second():
     assert asked == 2
 
 
-def test_a_deferred_codec_change_on_a_paused_look_is_drawn_when_it_is_due():
-    """Review finding 6: a codec change held back by the keyframe pace settled only at the
-    next frame's fan-out, and a paused look sends no next frame: the viewer waited for ever.
-    The paused look is now drawn again when the change is due (a keyframe asked 0.3 s ago:
-    at 1.0 s), and then the change settles."""
+def test_a_joining_page_does_not_narrow_the_codecs_before_it_says_what_it_decodes():
+    """Review: a new viewer counted as JPEG from its join, so each page joining a VP9
+    session turned everyone to JPEG until its view message came, then back: two new
+    encoders. It counts once it has said what it decodes, or once it has been silent for
+    VIEW_WAIT_S (then as JPEG, at the next frame's settling)."""
+    from fogbank.stream.session import VIEW_WAIT_S
+    aud = _audience()
+    s = aud.session
+    s.playing = True
+    a = _watcher("a")
+    aud.join(a, 0.0)
+    aud.set_codecs(a, ("vp09", "jpeg"), 0.01)
+    assert s.decoders == frozenset({"vp09", "jpeg"})
+    b = _watcher("b")
+    aud.join(b, 2.0)
+    aud._settle_codecs(2.0 + VIEW_WAIT_S / 2)
+    assert s.decoders == frozenset({"vp09", "jpeg"})   # b has not said yet
+    aud.set_codecs(b, ("vp09", "vp8", "jpeg"), 2.0 + VIEW_WAIT_S / 2)
+    assert s.decoders == frozenset({"vp09", "jpeg"})   # the same set: no new encoder
+    c = _watcher("c")                                  # a client that never says
+    aud.join(c, 4.0)
+    aud._settle_codecs(4.0 + VIEW_WAIT_S + 0.01)
+    assert s.decoders == frozenset({"jpeg"})
+
+
+def test_viewers_never_hold_the_presenters_frames():
+    """Review finding 1: a codec change held back on a paused look scheduled the look's
+    next frame for when the change was due, which held every frame of the presenter's too
+    (a drag's previews, a press of Play) for up to a second. A paused look's frames are
+    JPEG, so nothing waits on them: joins, leaves and codec changes on a paused look leave
+    the presenter's next frame where it was."""
+    import math
     aud = _audience()
     s = aud.session
     s.playing = False
-    a = _watcher("a")
-    aud.join(a, 0.0)                 # its key asked at 0.0
-    s.dirty, s.need_key = False, False
-    b = _watcher("b", codecs=("jpeg",))
-    aud.join(b, 0.3)                 # JPEG only: the session's codecs must narrow, not before 1.0
-    assert aud.codecs_due is True
-    assert s.dirty is True and s.not_before == 1.0
-    assert s.decoders == frozenset({"vp8", "jpeg"})   # not yet
-    aud._settle_codecs(1.0)          # the redrawn frame's fan-out, at 1.0
-    assert s.decoders == frozenset({"jpeg"}) and s.need_key is True
+    for i in range(6):
+        v = _watcher(f"v{i}")
+        aud.join(v, 0.1 * i)
+        aud.set_codecs(v, ("vp09", "jpeg") if i % 2 else ("jpeg",), 0.1 * i + 0.01)
+        if i % 3 == 2:
+            aud.leave(v, 0.1 * i + 0.05)
+    assert s.not_before == -math.inf
+
+
+def test_a_viewers_window_holds_its_own_round_trip():
+    """Review finding 3: the presenter's window grew by its round trip and the viewers'
+    stayed at two, so a viewer as far away as its presenter skipped frames (and asked
+    everyone for keyframes). A viewer's round trip is the least time its frames took to be
+    acknowledged: 0.11 s at 30 frames a second holds 3 more frames; none until one is."""
+    from fogbank.stream.live import Viewer
+    aud = _audience()
+    v = Viewer("v1", aud.session, None, "127.0.0.1")
+    assert v.window() == 2
+    v.inflight[1], v.last_frame = 10.0, 1
+    v.ack(1, 10.11)
+    assert v.window() == 2 + 3

@@ -133,6 +133,7 @@ const controls = new Controls($("controls"), schema, (path, value) => {
       const kept = edited && keepRules(edited, itemSchemaAt(schema, s.params, ["layers"], i), String(path[2]));
       if (kept && kept.notes.length) {
         notes = kept.notes;
+        if (!kept.layer) return {};   // not made: the control shows the look's value again (ruleNote)
         patch = buildPatch(s.params, ["layers", i], kept.layer);
       }
     }
@@ -155,7 +156,11 @@ function ruleNote(path, notes) {
   if (!wrap) return;
   for (const old of controls.form.querySelectorAll(".rule-note")) old.remove();
   const held = valueAtPath(store.get().params, path);
-  if (field && held !== undefined && typeof held !== "object" && field.value !== String(held)) field.value = String(held);
+  if (field && held !== undefined && typeof held !== "object" && field.value !== String(held)) {
+    field.value = String(held);
+    const range = wrap.querySelector('input[type="range"]');
+    if (range?.toValueText) range.value = range.toValueText(String(held));
+  }
   const note = document.createElement("p");
   note.className = "rule-note";
   note.setAttribute("role", "status");

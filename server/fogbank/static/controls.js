@@ -533,7 +533,8 @@ export function buildPatch(obj, path, value) {
 // another ("atLeast": another field, or the sum of |x| over a list's items) is carried up
 // with the edit that raised its bound, and an edit that lowers it past its bound stops at
 // the bound. Returns the layer as it will be sent and, for each field changed or held,
-// a note in words ({ key, text }); the layer unchanged where no rule binds.
+// a note in words ({ key, text }); the layer unchanged where no rule binds; layer null
+// where the bound field cannot follow (it would pass its own most): the edit is not made.
 export function keepRules(layer, node, edited) {
   const notes = [];
   const out = { ...layer };
@@ -543,9 +544,14 @@ export function keepRules(layer, node, edited) {
       : (out[b.sumAbs[0]] || []).reduce((acc, item) => acc + Math.abs(Number(item[b.sumAbs[1]]) || 0), 0);
     const prop = node.properties?.[rule.field] || {};
     const step = Number(prop.step) || (prop.type === "integer" ? 1 : 0);
+    // the server's own comparison, on the same doubles summed in the same order
+    if (!(Number(out[rule.field]) < bound)) continue;
     const up = step ? snapUp(bound, step) : bound;
-    if (!(Number(out[rule.field]) < bound - 1e-9)) continue;
     const name = label(rule.field, prop);
+    if (prop.maximum !== undefined && up > prop.maximum) {   // no room: the edit is not made
+      return { layer: null, notes: [{ key: edited,
+        text: `${name} would have to be ${up}, over its most (${prop.maximum}): ${rule.why}.` }] };
+    }
     out[rule.field] = up;
     notes.push({ key: edited === rule.field ? rule.field : edited,
       text: edited === rule.field ? `${name} stops at ${up} here: ${rule.why}. Lower the others first.`
@@ -554,10 +560,13 @@ export function keepRules(layer, node, edited) {
   return { layer: out, notes };
 }
 
-// the least multiple of `step` at or above v, written with step's decimals
+// the least multiple of `step` at or above v, written with step's decimals (one step more
+// where the written number falls under v: 0.1 + 0.2 is over 0.3)
 function snapUp(v, step) {
   const decimals = Math.max(0, (String(step).split(".")[1] || "").length);
-  return Number((Math.ceil(v / step - 1e-9) * step).toFixed(decimals));
+  let r = Number((Math.ceil(v / step - 1e-9) * step).toFixed(decimals));
+  if (r < v) r = Number((r + step).toFixed(decimals));
+  return r;
 }
 
 // the schema of the list item at `path` of `params` (a layer), or null

@@ -46,7 +46,8 @@ from fogbank.stream.peer import (LOOK_CHANGES, STEERING, TOO_LARGE, Peer, apply_
                                  refused_answers)
 from fogbank.stream.protocol import (MAX_MESSAGE, PROTOCOL, AckMsg, ControlMsg, InteractMsg, PongMsg, ProtocolError,
                                      ShareMsg, ViewMsg, parse)
-from fogbank.stream.session import MAX_IN_FLIGHT, PLAY_BUDGET_MS, REFINE_BUDGET_MS, Session
+from fogbank.stream.link import MAX_PIPE_FRAMES
+from fogbank.stream.session import MAX_IN_FLIGHT, PLAY_BUDGET_MS, REFINE_BUDGET_MS, VIEW_WAIT_S, Session
 
 if TYPE_CHECKING:
     from fogbank.stream.streaming import Client
@@ -108,6 +109,8 @@ class Viewer(Peer):
         self.waiting_key = True   # video frames wait for a keyframe (a new viewer, or one that skipped)
         self.codecs: tuple[str, ...] = ("jpeg",)   # what its page decodes (its view message)
         self.told_codecs = False   # its first view message (as it joins) came
+        self.rtt = math.inf        # the least ack time of its frames, s (ack)
+        self.joined = 0.0          # when it joined its audience (Audience.join)
         self.frames = 0    # frames sent to it
         self.last_frame = 0   # the id of the last frame given it
         self.queued_frames = 0   # frames given it and not yet written to its socket
@@ -122,18 +125,31 @@ class Viewer(Peer):
     def unacked(self) -> int:
         return len(self.inflight)
 
-    def ack(self, frame: int) -> None:
+    def ack(self, frame: int, now: float | None = None) -> None:
         """Frames up to `frame` arrived (an ack past the last frame given it is ignored, as
-        the session's own are: it would free a window that its socket still holds)."""
+        the session's own are: it would free a window that its socket still holds). With
+        `now`, the frame's ack time is a bound on the viewer's round trip (its transfer in
+        it): the least of them is the round trip its window holds (window)."""
         if frame > self.last_frame:
             return
         for f in [f for f in self.inflight if f <= frame]:
-            del self.inflight[f]
+            sent = self.inflight.pop(f)
+            if now is not None and f == frame:
+                self.rtt = min(self.rtt, now - sent)
+
+    def window(self) -> int:
+        """Frames that may be unacknowledged: two, and those one round trip of its own holds
+        at the stream's interval, as the presenter's (session.py Session.window): a viewer
+        as far away as its presenter keeps its frame rate."""
+        if self.rtt == math.inf:
+            return MAX_IN_FLIGHT
+        return MAX_IN_FLIGHT + min(MAX_PIPE_FRAMES, int(self.rtt / self.session.link.interval))
 
     def room(self) -> bool:
-        """Room for a frame: fewer than MAX_IN_FLIGHT unacknowledged, and as few waiting
-        to be written (a socket that does not drain holds them, whatever is acknowledged)."""
-        return self.unacked() < MAX_IN_FLIGHT and self.queued_frames < MAX_IN_FLIGHT
+        """Room for a frame: fewer than its window unacknowledged, and at most MAX_IN_FLIGHT
+        waiting to be written (a socket that does not drain holds them, whatever is
+        acknowledged)."""
+        return self.unacked() < self.window() and self.queued_frames < MAX_IN_FLIGHT
 
     async def send_json(self, msg: dict[str, Any]) -> None:
         self._put("text", json.dumps(msg))
@@ -229,7 +245,6 @@ class Audience:
         self.viewers: dict[str, Viewer] = {}
         self.control: str | None = None
         self.key_asked = -math.inf
-        self.codecs_due = False   # a viewer changed its codecs since the session's were settled
         # the presenter's alone: its page reconnects with it (`resume=`) after a blip, and
         # the viewers, who know the token, cannot take the session over with it
         self.resume_key = secrets.token_urlsafe(16)
@@ -274,28 +289,34 @@ class Audience:
             return self.control is None
         return self.control == getattr(peer, "id", None)
 
-    def _codecs(self) -> None:
-        """The session's video codec must be one every viewer decodes (else JPEG)."""
-        if not self.viewers:
-            self.session.decoders = None
-        else:
-            self.session.decoders = frozenset.intersection(*(frozenset(v.codecs) for v in self.viewers.values()))
+    def _intersection(self, now: float) -> frozenset | None:
+        """What every viewer decodes (None: no viewer counts). A viewer counts once it has
+        said what it decodes (its first view message, as it joins), or once it has been
+        silent for VIEW_WAIT_S (then its JPEG): a joining page does not narrow everyone's
+        codec for the moment before its view message comes."""
+        counted = [frozenset(v.codecs) for v in self.viewers.values()
+                   if v.told_codecs or now - v.joined >= VIEW_WAIT_S]
+        return frozenset.intersection(*counted) if counted else None
 
-    def join(self, viewer: Viewer, now: float) -> None:
-        """A new viewer: its codecs reach the session, and its first video frame (a keyframe)
-        is asked, at once unless a keyframe was asked in the last KEY_EVERY_S (viewers that
-        joined and left in a loop forced a new encoder and a keyframe on every viewer each
-        time); a paused look is drawn again for it."""
-        self.viewers[viewer.id] = viewer
-        metrics.VIEWERS.inc()
-        self.codecs_due = True
-        self._settle_codecs(now)
-        s = self.session
+    def _codecs(self) -> None:
+        """The session's video codec must be one every viewer decodes (else JPEG): at once."""
+        self.session.decoders = self._intersection(math.inf)
+
+    def _ask_key(self, now: float) -> None:
+        """A keyframe for the viewers waiting for one, at most every KEY_EVERY_S (fan_out asks
+        again for those still waiting when it is due)."""
         if now - self.key_asked >= KEY_EVERY_S:
             self.key_asked = now
-            s.need_key = True
-        if not s.playing:
-            s.redo()   # a JPEG viewer's frame at once; a video one keeps what it cannot decode for the key
+            self.session.need_key = True
+
+    def join(self, viewer: Viewer, now: float) -> None:
+        """A new viewer. Its codecs, and the keyframe it starts on, come with its first view
+        message (set_codecs); a paused look is drawn again for it (a JPEG frame)."""
+        viewer.joined = now
+        self.viewers[viewer.id] = viewer
+        metrics.VIEWERS.inc()
+        if not self.session.playing:
+            self.session.redo()
 
     def leave(self, viewer: Viewer, now: float | None = None) -> bool:
         """A viewer left: the session's codecs may widen, at the pace of KEY_EVERY_S (`now`
@@ -308,7 +329,6 @@ class Audience:
         if now is None:
             self._codecs()
         else:
-            self.codecs_due = True
             self._settle_codecs(now)
         return True
 
@@ -320,31 +340,30 @@ class Audience:
             self.session.interacting = False
 
     def set_codecs(self, viewer: Viewer, codecs: tuple[str, ...], now: float) -> None:
+        """A viewer says what it decodes (its view messages): a first word or a change
+        restarts its decoder, so it waits for a keyframe, asked at the pace of KEY_EVERY_S
+        like everything else (a page joining in a loop asked one each time)."""
         first, viewer.told_codecs = not viewer.told_codecs, True
-        if codecs != viewer.codecs:
+        if first or codecs != viewer.codecs:
             viewer.codecs = codecs
-            viewer.waiting_key = True   # its decoder starts again
-            self.codecs_due = True
-            if first:   # what its page decodes, said as it joins: at once, as a join's keyframe
-                self.key_asked = -math.inf
+            viewer.waiting_key = True
             self._settle_codecs(now)
+            self._ask_key(now)
 
     def _settle_codecs(self, now: float) -> None:
-        """A viewer's new codecs reach the session (its codec, and a keyframe) at most every
-        KEY_EVERY_S, the rest at its next frame after (a paused look's is drawn then): a
-        viewer that flipped its codecs in every message forced a keyframe (or a new encoder)
-        on every viewer each time. Until then it skips the frames it cannot decode (fan_out)."""
-        if not self.codecs_due:
+        """The session's codecs follow what its viewers decode, changed (a new encoder and a
+        keyframe for everyone) only when that set changes, at most every KEY_EVERY_S: a
+        viewer that flipped its codecs in every message, or viewers joining and leaving in a
+        loop, forced a keyframe (or a new encoder) on every viewer each time. Until then a
+        viewer skips the frames it cannot decode (fan_out); each frame settles again. A
+        paused look's frames are JPEG: nothing waits on them."""
+        want = self._intersection(now)
+        if want == self.session.decoders:
             return
         if now - self.key_asked >= KEY_EVERY_S:
-            self.codecs_due = False
             self.key_asked = now
-            self._codecs()
+            self.session.decoders = want
             self.session.need_key = True
-        elif not self.session.playing:
-            # no frame may come to settle it (fan_out): a paused look is drawn again when
-            # the change is due (review: a deferred change waited for the next frame)
-            self.session.redo(after=self.key_asked + KEY_EVERY_S)
 
     async def fan_out(self, frame: int, codec: str, key: bool, data: bytes, stats: dict[str, Any] | None,
                       now: float) -> None:
@@ -368,14 +387,7 @@ class Audience:
                 await v.send_json(stats)
             await v.send_bytes(data)
         if video and any(v.waiting_key and v.room() and codec in v.codecs for v in self.viewers.values()):
-            s = self.session
-            if now - self.key_asked >= KEY_EVERY_S:
-                self.key_asked = now
-                s.need_key = True
-                if not s.playing:
-                    s.redo()   # a paused look has no next frame to carry it
-            elif not s.playing:
-                s.redo(after=self.key_asked + KEY_EVERY_S)
+            self._ask_key(now)
 
     def end(self, reason: str) -> None:
         """The live session is over: each viewer is told why, then closed."""
@@ -582,7 +594,7 @@ async def viewer_endpoint(ws: WebSocket, streamer: Any, token: str, addr: str, r
                                               refused_answers(data), now)
                     continue
                 if isinstance(parsed, AckMsg):
-                    viewer.ack(parsed.frame)
+                    viewer.ack(parsed.frame, now)
                     await viewer.pay(now)
                 elif isinstance(parsed, PongMsg):
                     pass
