@@ -44,3 +44,13 @@ def test_each_stated_rule_is_the_validators(name):
             up = int(round(up)) if prop.get("type") == "integer" else round(up, 10)
             if up <= prop.get("maximum", math.inf):
                 kind.model.model_validate({**layer, rule["field"]: up})
+
+
+def test_every_kind_requires_its_kind_and_carries_its_help():
+    """A kind's own json_schema_extra (its rules) replaced LayerBase's: cosine and particles
+    lost `kind` from their required fields (schemathesis then sent layers without one) and
+    their help (the page showed none). Every kind keeps both."""
+    for name, kind in KINDS.items():
+        schema = kind.model.model_json_schema()
+        assert (name, "kind" in schema.get("required", [])) == (name, True)
+        assert (name, bool(schema.get("source")), bool(schema.get("summary"))) == (name, True, True)

@@ -10,7 +10,7 @@ from pydantic import ConfigDict, Field, model_validator
 from fogbank.kinds.kind import Kind, Layout
 from fogbank.kinds.rays import slide
 from fogbank.kinds.reduce import EXACT_ABOVE, phase_at
-from fogbank.model.fields import LayerBase, Strict, Wave, num
+from fogbank.model.fields import LayerBase, Strict, Wave, num, with_rules
 
 MAX_COSINE_TERMS = 8
 
@@ -25,9 +25,9 @@ class Cosine(LayerBase):
     """Biri 3.2.1: density * (c0 + sum c_i cos(k_i . x / scale + phi_i))."""
     # x-rules: the validator's cross-field rule stated for the page, which keeps a control
     # inside it (static/controls.js keepRules): c0 is at least the sum of |amp|
-    model_config = ConfigDict(title="Cosine layers", json_schema_extra={"x-rules": [
+    model_config = ConfigDict(title="Cosine layers", json_schema_extra=with_rules(
         {"field": "c0", "atLeast": {"sumAbs": ["terms", "amp"]},
-         "why": "the constant c₀ is at least the sum of the |amplitudes|, so the density never goes negative"}]})
+         "why": "the constant c₀ is at least the sum of the |amplitudes|, so the density never goes negative"}))
     kind: Literal["cosine"] = "cosine"
     source = "Biri, Michelin & Arquès 2002, section 3.2.1"
     summary = "Bands and waves of fog from a sum of cosines, integrated exactly along each ray; the wind slides their phases."

@@ -9,7 +9,7 @@ import numpy as np
 from pydantic import ConfigDict, Field, PrivateAttr, model_validator
 
 from fogbank.kinds.kind import Kind, Layout
-from fogbank.model.fields import MAX_PARTICLES, Direction, Int, LayerBase, Position, num
+from fogbank.model.fields import MAX_PARTICLES, Direction, Int, LayerBase, Position, num, with_rules
 
 
 Spread = Annotated[float, Field(strict=True, ge=0.0, le=1000.0)]
@@ -18,8 +18,8 @@ Spread = Annotated[float, Field(strict=True, ge=0.0, le=1000.0)]
 class Particles(LayerBase):
     """Fischer: a few free-floating particles; T = prod (1 - alpha s_j clamp(1 - dist_j/R, 0, 1))."""
     # x-rules: the validator's cross-field rule for the page (static/controls.js keepRules)
-    model_config = ConfigDict(title="Particles", json_schema_extra={"x-rules": [
-        {"field": "life_max", "atLeast": {"field": "life_min"}, "why": "the longest life is at least the shortest"}]})
+    model_config = ConfigDict(title="Particles", json_schema_extra=with_rules(
+        {"field": "life_max", "atLeast": {"field": "life_min"}, "why": "the longest life is at least the shortest"}))
     kind: Literal["particles"] = "particles"
     source = "Fischer, Clouds, Fog, and Smoke"
     summary = "A few free-floating particles born at an emitter and carried by the wind: drifting fog or smoke."

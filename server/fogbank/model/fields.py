@@ -128,6 +128,16 @@ def mathml(latex: str) -> str:
     return convert(latex, display="block")
 
 
+def with_rules(*rules: dict[str, Any]):
+    """A layer kind's json_schema_extra: LayerBase's (`kind` required, the kind's help) and
+    its validator's cross-field rules stated for the page (x-rules: static/controls.js
+    keepRules). A kind's own json_schema_extra replaces LayerBase's; this keeps both."""
+    def extra(schema: dict[str, Any], cls: type) -> None:
+        _kind_required(schema, cls)
+        schema["x-rules"] = [dict(r) for r in rules]
+    return extra
+
+
 class LayerBase(Strict):
     """A fog layer. Each kind's class states `source` (the paper and section), `summary`
     (what it does, in a sentence a newcomer reads) and `formula` (LaTeX)."""
