@@ -99,10 +99,9 @@ def test_a_presenters_blip_resumes_its_live_session_for_its_viewers(server, brow
     Its sockets' rooms: the same before and after (a page sharing nothing takes a fresh
     one: test_page_reconnects_after_the_server_restarts)."""
     from urllib.parse import parse_qs, urlsplit
-    presenter = new_page(browser, server.url + "/?time=3")
     rooms = []
-    presenter.on("websocket", lambda ws: rooms.append(parse_qs(urlsplit(ws.url).query)))
-    presenter.reload()
+    presenter = new_page(browser, server.url + "/?time=3",
+                         before=lambda p: p.on("websocket", lambda ws: rooms.append(parse_qs(urlsplit(ws.url).query))))
     wait_frames(presenter, 3)
     presenter.click("#share-live")
     presenter.wait_for_function("window.fogbank.store.get().live?.token")

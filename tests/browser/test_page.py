@@ -595,21 +595,31 @@ def test_a_costly_look_blurs_its_preview_while_dragged_not_the_frame_rate(server
     wait_frames(page, 1)
     wait_full_frame_of_current_version(page)
     full = page.evaluate("[window.fogbank.store.get().lastFrame.width, window.fogbank.store.get().lastFrame.height]")
-    page.evaluate("window.__frames = []; window.fogbank.store.subscribe((s, p) => {"
-                  " if (s.lastFrame !== p.lastFrame) window.__frames.push([s.lastFrame.width, s.lastFrame.full]); }); 0")
+    page.evaluate("window.fogbank.store.subscribe((s, p) => {"
+                  " if (s.lastFrame !== p.lastFrame) window.__frames?.push([s.lastFrame.width, s.lastFrame.full]); }); 0")
     box = page.locator("#view").bounding_box()
     x, y = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
-    page.mouse.move(x, y)
-    page.mouse.down()
-    refining = False
-    for i in range(40):
-        page.mouse.move(x + 3 * i, y)
-        time.sleep(0.05)
-        refining = refining or page.locator("#stat-refining").is_visible()
-    page.mouse.up()
-    wait_full_frame_of_current_version(page)
-    frames = page.evaluate("window.__frames")
-    previews = [w for w, is_full in frames if not is_full]
+
+    def drag():
+        page.evaluate("window.__frames = []")
+        page.mouse.move(x, y)
+        page.mouse.down()
+        refining = False
+        for i in range(40):
+            page.mouse.move(x + 3 * i, y)
+            time.sleep(0.05)
+            refining = refining or page.locator("#stat-refining").is_visible()
+        page.mouse.up()
+        wait_full_frame_of_current_version(page)
+        frames = page.evaluate("window.__frames")
+        return frames, [w for w, is_full in frames if not is_full], refining
+    # a loaded machine (the whole suite on 2 cores) once gave 1 preview in the 2 s drag
+    # where the test alone gives 12-20: a miss is measured again once, and a page whose
+    # drag draws no previews misses both
+    frames, previews, refining = drag()
+    if not (len(previews) >= 5 and refining):
+        print(f"\nfirst drag: {len(previews)} previews, refining shown {refining}; again")
+        frames, previews, refining = drag()
     assert len(previews) >= 5 and refining
     assert min(previews) < full[0]                   # smaller while dragged
     assert frames[-1] == [full[0], True]              # the refinement: the stream's own size
