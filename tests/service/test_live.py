@@ -5,6 +5,7 @@ to the next keyframe without slowing the others; a presenter who leaves ends it.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import threading
 import time
@@ -282,6 +283,18 @@ def test_twenty_viewers_get_the_presenters_frames_from_one_render_each():
     assert 0.9 <= r["renders_a_frame"] <= 1.1
 
 
+@contextlib.asynccontextmanager
+async def shared_presenter(base: str, view: dict):
+    """A presenter's socket to a real server (`base`: its ws URL up to the query) that has
+    read its hello and state, sent `view` and asked to share."""
+    import websockets
+    async with websockets.connect(base + f"v=1&time=3&room={ROOM}", max_queue=None) as p:
+        await p.recv(), await p.recv()
+        await p.send(json.dumps(view))
+        await p.send(json.dumps({"type": "share"}))
+        yield p
+
+
 def test_a_viewer_that_leaves_its_frames_unacknowledged_is_let_go():
     """A viewer that reads but never acknowledges holds its window: after ack_timeout_s
     (2 s here) it is closed with 4408 and a reason, and the presenter is told it left."""
@@ -293,10 +306,7 @@ def test_a_viewer_that_leaves_its_frames_unacknowledged_is_let_go():
 
     async def run():
         base = srv.url.replace("http", "ws", 1) + "/ws?"
-        async with websockets.connect(base + f"v=1&time=3&room={ROOM}", max_queue=None) as p:
-            await p.recv(), await p.recv()
-            await p.send(json.dumps(VIEW))
-            await p.send(json.dumps({"type": "share"}))
+        async with shared_presenter(base, VIEW) as p:
             token, seen, code = None, [], None
             t0 = time.monotonic()
             v = None
@@ -578,10 +588,7 @@ def test_a_viewer_through_a_thin_link_skips_to_keyframes_without_slowing_the_oth
 
     async def run():
         base = srv.url.replace("http", "ws", 1) + "/ws?"
-        async with websockets.connect(base + f"v=1&time=3&room={ROOM}", max_queue=None) as p:
-            await p.recv(), await p.recv()
-            await p.send(json.dumps(view))
-            await p.send(json.dumps({"type": "share"}))
+        async with shared_presenter(base, view) as p:
             token = None
             while token is None:
                 m = await asyncio.wait_for(p.recv(), 30)

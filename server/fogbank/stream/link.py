@@ -66,6 +66,14 @@ def jpeg_size(q: float) -> float:
     return JPEG_SIZE[-1][1]
 
 
+def pipe_frames(rtt: float, interval: float) -> int:
+    """Frames sent `interval` s apart during a round trip of `rtt` s (inf: not measured,
+    0), at most MAX_PIPE_FRAMES."""
+    if rtt == math.inf:
+        return 0
+    return min(MAX_PIPE_FRAMES, int(rtt / interval))
+
+
 class Link:
     """The round trip, delivery rate and frame budget of one viewer's link."""
 
@@ -128,13 +136,11 @@ class Link:
         return self.rtt if self.rtt < math.inf else None
 
     def pipe_frames(self) -> int:
-        """Frames the stream sends during one round trip (at its interval): the window
+        """Frames the stream sends during one round trip (pipe_frames below): the window
         holds them beside its two (session.py Session.window), so that waiting for acks to
         come back does not cap the frame rate, and at most two frames plus one round trip
-        wait. 0 until a ping has measured the round trip; at most MAX_PIPE_FRAMES."""
-        if self.rtt == math.inf:
-            return 0
-        return min(MAX_PIPE_FRAMES, int(self.rtt / self.interval))
+        wait. 0 until a ping has measured the round trip."""
+        return pipe_frames(self.rtt, self.interval)
 
     def rate_bps(self) -> float | None:
         """Bits a second the link delivers (None without a round trip or samples)."""

@@ -46,7 +46,7 @@ from fogbank.stream.peer import (LOOK_CHANGES, STEERING, TOO_LARGE, Peer, apply_
                                  refused_answers)
 from fogbank.stream.protocol import (MAX_MESSAGE, PROTOCOL, AckMsg, ControlMsg, InteractMsg, PongMsg, ProtocolError,
                                      ShareMsg, ViewMsg, parse)
-from fogbank.stream.link import MAX_PIPE_FRAMES
+from fogbank.stream.link import pipe_frames
 from fogbank.stream.session import MAX_IN_FLIGHT, PLAY_BUDGET_MS, REFINE_BUDGET_MS, VIEW_WAIT_S, Session
 
 if TYPE_CHECKING:
@@ -141,9 +141,7 @@ class Viewer(Peer):
         """Frames that may be unacknowledged: two, and those one round trip of its own holds
         at the stream's interval, as the presenter's (session.py Session.window): a viewer
         as far away as its presenter keeps its frame rate."""
-        if self.rtt == math.inf:
-            return MAX_IN_FLIGHT
-        return MAX_IN_FLIGHT + min(MAX_PIPE_FRAMES, int(self.rtt / self.session.link.interval))
+        return MAX_IN_FLIGHT + pipe_frames(self.rtt, self.session.link.interval)
 
     def room(self) -> bool:
         """Room for a frame: fewer than its window unacknowledged, and at most MAX_IN_FLIGHT
